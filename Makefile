@@ -1,0 +1,27 @@
+# matrix-tracker: the two commands that matter are `make demo` and `make test` (see README.md).
+SHELL := /bin/bash
+.DEFAULT_GOAL := help
+IN_ENV := source scripts/env.sh &&
+
+.PHONY: help setup build test demo clean
+
+help:
+	@echo "make setup  - create .venv (pinned), colcon build ros2_ws, install offline weights (idempotent)"
+	@echo "make test   - run every test (unit, integration, ROS 2 over DDS, system)"
+	@echo "make demo   - replay the real MATRIX sample through ROS 2 and write pictures to out/demo"
+	@echo "make build  - colcon build only"
+
+setup:
+	bash scripts/setup.sh
+
+build:
+	bash scripts/build.sh
+
+test: setup
+	$(IN_ENV) python -m pytest
+
+demo: setup
+	$(IN_ENV) bash scripts/demo.sh
+
+clean:
+	rm -rf ros2_ws/build ros2_ws/install ros2_ws/log out .pytest_cache

@@ -1,0 +1,1 @@
+"""Bird's-eye-view multi-view fusion network and tracker: publishes detections and tracks."""

@@ -1,0 +1,1 @@
+"""The ``matrix-tracker`` command line tool."""

@@ -1,0 +1,53 @@
+"""Reading and writing OpenCV FileStorage XML calibration files."""
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from matrix_core.datasets.types import DatasetError
+
+
+def read_matrices(path: Path, names) -> dict:
+    """Read the named matrices from an OpenCV FileStorage file (ASCII or base64 binary data).
+
+    Nodes holding plain text numbers (Wildtrack's ``<rvec>1 2 3</rvec>``) are read as float vectors.
+    Raises :class:`DatasetError` naming the file and node on any problem.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DatasetError(f'calibration file not found: {path}')
+    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+    try:
+        if not fs.isOpened():
+            raise DatasetError(f'cannot parse calibration file: {path}')
+        out = {}
+        for name in names:
+            node = fs.getNode(name)
+            if node.empty():
+                raise DatasetError(f'{path}: missing node <{name}>')
+            if node.isString():
+                try:
+                    mat = np.array([float(v) for v in node.string().split()])
+                except ValueError as exc:
+                    raise DatasetError(f'{path}: node <{name}> is not numeric') from exc
+            else:
+                mat = node.mat()
+            if mat is None or not np.all(np.isfinite(mat)):
+                raise DatasetError(f'{path}: node <{name}> is empty or not finite')
+            out[name] = np.asarray(mat, dtype=np.float64)
+        return out
+    finally:
+        fs.release()
+
+
+def write_matrices(path: Path, matrices: dict) -> None:
+    """Write named float64 matrices to an OpenCV FileStorage XML file (creating parent folders)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
+    try:
+        for name, mat in matrices.items():
+            fs.write(name, np.asarray(mat, dtype=np.float64))
+    finally:
+        fs.release()

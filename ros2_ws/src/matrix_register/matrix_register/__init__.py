@@ -1,0 +1,1 @@
+"""Registration of each drone's image to its reference view (local features, RANSAC homography): publishes homographies."""

@@ -1,0 +1,1 @@
+"""ROS 2 glue of matrix-tracker: conversions between core types and messages, settings as parameters."""

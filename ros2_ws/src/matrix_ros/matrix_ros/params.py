@@ -1,0 +1,78 @@
+"""Settings dataclasses as ROS parameters (same names and defaults as the CLI flags of
+:mod:`matrix_core.settings`), and the standard ``main`` of a node that takes both."""
+
+import argparse
+import sys
+import typing
+
+import rclpy
+from rcl_interfaces.msg import ParameterDescriptor, ParameterType
+from rclpy.parameter import Parameter
+from rclpy.utilities import remove_ros_args
+
+from matrix_core.settings import add_settings_arguments, settings_fields, settings_from_namespace
+
+
+_PARAM_TYPES = {
+    bool: ParameterType.PARAMETER_BOOL, int: ParameterType.PARAMETER_INTEGER,
+    float: ParameterType.PARAMETER_DOUBLE, str: ParameterType.PARAMETER_STRING,
+    (list, bool): ParameterType.PARAMETER_BOOL_ARRAY, (list, int): ParameterType.PARAMETER_INTEGER_ARRAY,
+    (list, float): ParameterType.PARAMETER_DOUBLE_ARRAY, (list, str): ParameterType.PARAMETER_STRING_ARRAY,
+}
+
+
+def _type_key(typ):
+    """Python annotation -> key of ``_PARAM_TYPES`` (tuples are declared as arrays)."""
+    if typing.get_origin(typ) in (list, tuple):
+        return (list, typing.get_args(typ)[0])
+    return typ
+
+
+def declare_settings(node, cls, defaults=None):
+    """Declare one parameter per field of ``cls`` on ``node`` and return the filled dataclass.
+
+    ``defaults`` (an instance of ``cls``, e.g. from CLI flags) replaces the dataclass defaults; values
+    given with ``--ros-args -p name:=value`` or a YAML file win over both. The dataclass validates.
+    """
+    values = {}
+    for name, typ, default, help_text in settings_fields(cls):
+        if defaults is not None:
+            default = getattr(defaults, name)
+        param_type = _PARAM_TYPES[_type_key(typ)]
+        descriptor = ParameterDescriptor(description=help_text, type=param_type)
+        if isinstance(default, (list, tuple)) and not default:
+            # rclpy cannot infer an array type from an empty list: declare the type, unset means empty.
+            param = node.declare_parameter(name, Parameter.Type(param_type), descriptor)
+            values[name] = list(param.value) if param.value is not None else []
+        else:
+            param = node.declare_parameter(name, list(default) if isinstance(default, tuple) else default,
+                                           descriptor)
+            values[name] = list(param.value) if isinstance(default, (list, tuple)) else param.value
+    return cls(**values)
+
+
+def parse_node_args(cls, argv=None, description: str = ''):
+    """Parse ``argv`` (sys.argv) into (settings from CLI flags, the full argv for rclpy.init)."""
+    argv = list(sys.argv if argv is None else argv)
+    parser = argparse.ArgumentParser(description=description)
+    add_settings_arguments(parser, cls)
+    ns = parser.parse_args(remove_ros_args(argv)[1:])
+    return settings_from_namespace(cls, ns), argv
+
+
+def spin_node(node_factory, cls, argv=None, description: str = '') -> int:
+    """Standard node ``main``: CLI flags -> defaults, ``rclpy.init``, build the node, spin until Ctrl-C."""
+    cli_settings, argv = parse_node_args(cls, argv, description)
+    rclpy.init(args=argv)
+    node = None
+    try:
+        node = node_factory(cli_settings)
+        rclpy.spin(node)
+    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        if rclpy.ok():
+            rclpy.shutdown()
+    return 0

@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# colcon build of ros2_ws inside the venv (the ROS 2 Jazzy wheels from PyPI live in .venv).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+VENV=${VENV:-$ROOT/.venv}
+export PATH="$VENV/bin:$PATH"
+# colcon and ament look for the ROS packages under these prefixes; the pip wheels install into the venv.
+export AMENT_PREFIX_PATH="$VENV" CMAKE_PREFIX_PATH="$VENV"
+cd ros2_ws
+colcon --log-base log build --base-paths src --build-base build --install-base install \
+  --event-handlers console_direct- console_cohesion- summary+ status- 2>&1 | tail -n 5

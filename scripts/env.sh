@@ -1,0 +1,15 @@
+# Source this: the environment the nodes, tools and tests run in (venv + built workspace + DDS isolation).
+_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+export VENV="${VENV:-$_root/.venv}"
+export PATH="$VENV/bin:$PATH"
+export AMENT_PREFIX_PATH="$VENV${AMENT_PREFIX_PATH:+:$AMENT_PREFIX_PATH}"
+export CMAKE_PREFIX_PATH="$VENV${CMAKE_PREFIX_PATH:+:$CMAKE_PREFIX_PATH}"
+if [ -f "$_root/ros2_ws/install/setup.sh" ]; then
+  set +u
+  COLCON_CURRENT_PREFIX="$_root/ros2_ws/install" . "$_root/ros2_ws/install/setup.sh"
+fi
+# Keep DDS traffic on this machine and away from other runs: tests and demos pick their own domain.
+export ROS_AUTOMATIC_DISCOVERY_RANGE="${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}"
+export ROS_DOMAIN_ID="${ROS_DOMAIN_ID:-$(( (RANDOM % 90) + 5 ))}"
+export MATRIX_SHARED="${MATRIX_SHARED:-$_root/../shared}"
+unset _root
