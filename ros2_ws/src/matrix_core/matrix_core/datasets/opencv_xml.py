@@ -26,7 +26,9 @@ def read_matrices(path: Path, names) -> dict:
             node = fs.getNode(name)
             if node.empty():
                 raise DatasetError(f'{path}: missing node <{name}>')
-            if node.isString():
+            if node.isSeq():
+                mat = np.array([node.at(i).real() for i in range(node.size())])
+            elif node.isString():
                 try:
                     mat = np.array([float(v) for v in node.string().split()])
                 except ValueError as exc:

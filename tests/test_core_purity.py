@@ -1,0 +1,65 @@
+"""The core package must never import rclpy or ROS message/interface packages (algorithms apart from ROS)."""
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+CORE = Path(__file__).resolve().parents[1] / 'ros2_ws' / 'src' / 'matrix_core' / 'matrix_core'
+FORBIDDEN_PREFIXES = ('rclpy', 'rosidl', 'matrix_ros', 'matrix_msgs', 'builtin_interfaces', 'launch')
+
+
+def _forbidden(module: str) -> bool:
+    top = module.split('.')[0]
+    return top.startswith(FORBIDDEN_PREFIXES) or top.endswith('_msgs') or top.endswith('_interfaces')
+
+
+def imported_modules(path: Path) -> set:
+    """Every module a Python file imports, at any depth (function-level imports included)."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.add(node.module)
+    return names
+
+
+def test_forbidden_detector_catches_ros_imports(tmp_path):
+    bad = tmp_path / 'bad.py'
+    bad.write_text('def f():\n    import rclpy\n    from sensor_msgs.msg import Image\n')
+    assert {m for m in imported_modules(bad) if _forbidden(m)} == {'rclpy', 'sensor_msgs.msg'}
+
+
+def test_no_core_source_imports_ros():
+    offenders = {}
+    files = sorted(CORE.rglob('*.py'))
+    assert len(files) > 10
+    for path in files:
+        bad = sorted(m for m in imported_modules(path) if _forbidden(m))
+        if bad:
+            offenders[str(path.relative_to(CORE))] = bad
+    assert not offenders, f'core modules import ROS packages: {offenders}'
+
+
+def test_core_modules_import_with_ros_blocked():
+    """Import every core module in a fresh interpreter where importing rclpy or *_msgs raises."""
+    script = f'''
+import importlib, pkgutil, sys
+class Block:
+    def find_spec(self, name, path=None, target=None):
+        top = name.split('.')[0]
+        if top.startswith({FORBIDDEN_PREFIXES!r}) or top.endswith('_msgs'):
+            raise ImportError('core imported ' + name)
+sys.meta_path.insert(0, Block())
+import matrix_core
+count = 0
+for info in pkgutil.walk_packages(matrix_core.__path__, 'matrix_core.'):
+    importlib.import_module(info.name)
+    count += 1
+print(count)
+'''
+    result = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert int(result.stdout.strip()) > 10
