@@ -3,12 +3,13 @@ SHELL := /bin/bash
 .DEFAULT_GOAL := help
 IN_ENV := source scripts/env.sh &&
 
-.PHONY: help setup build test demo clean
+.PHONY: help setup build test demo bench clean
 
 help:
 	@echo "make setup  - create .venv (pinned), colcon build ros2_ws, install offline weights (idempotent)"
 	@echo "make test   - run every test (unit, integration, ROS 2 over DDS, system)"
 	@echo "make demo   - replay the real MATRIX sample through ROS 2 and write pictures to out/demo"
+	@echo "make bench  - print the speed figures of every component (scripts/bench_*.py)"
 	@echo "make build  - colcon build only"
 
 setup:
@@ -22,6 +23,9 @@ test: setup
 
 demo: setup
 	$(IN_ENV) bash scripts/demo.sh
+
+bench: setup
+	$(IN_ENV) for b in scripts/bench_*.py; do echo "== $$b"; python "$$b" || exit 1; done
 
 clean:
 	rm -rf ros2_ws/build ros2_ws/install ros2_ws/log out .pytest_cache
