@@ -1,0 +1,1 @@
+"""Launch files and the graph monitor of matrix-tracker."""

@@ -1,0 +1,24 @@
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'matrix_bringup'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
+        ('share/' + package_name + '/config', glob('config/*.yaml')),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='matrix-tracker developers',
+    maintainer_email='dev@matrix-tracker.invalid',
+    description='Launch files for the matrix-tracker graph and the graph monitor.',
+    license='Apache-2.0',
+    entry_points={'console_scripts': ['graph_monitor = matrix_bringup.graph_monitor:main']},
+)

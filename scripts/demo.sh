@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# `make demo`: replay the real MATRIX sample through the ROS 2 graph (separate processes over DDS),
+# print the scores and write pictures to out/demo/. Run inside scripts/env.sh (the Makefile does).
+# The same graph on a full ROS 2 install: ros2 launch matrix_bringup calib_register.launch.py dataset:=...
+set -euo pipefail
+cd "$(dirname "$0")/.."
+SAMPLE=${SAMPLE:-$MATRIX_SHARED/matrix_sample}
+OUT=${OUT:-out/demo}
+INSTALL=ros2_ws/install
+VIEWS='[D1,D2,D3,D4,D5,D6,D7,D8]'
+mkdir -p "$OUT"
+[ -d "$SAMPLE" ] || { echo "demo: MATRIX sample not found at $SAMPLE (set SAMPLE=...)" >&2; exit 1; }
+
+echo "== dataset"
+matrix-tracker info "$SAMPLE"
+
+pids=()
+cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; wait 2>/dev/null || true; }
+trap cleanup EXIT INT TERM
+start() {  # start PACKAGE EXECUTABLE LOG ARGS...: a node in its own process, logging to OUT/LOG
+  local pkg=$1 exe=$2 log=$3; shift 3
+  "$INSTALL/$pkg/lib/$pkg/$exe" "$@" > "$OUT/$log" 2>&1 &
+  pids+=($!)
+}
+
+echo "== graph: dataset_player -> calib (8 drones) + register (8 drones) -> graph_monitor (ROS_DOMAIN_ID=$ROS_DOMAIN_ID)"
+start matrix_calib calib calib.log --ros-args -p "views:=$VIEWS" -p "prior_dataset:=$SAMPLE" -p qos:=reliable
+start matrix_register register register.log --ros-args -p "views:=$VIEWS" -p "reference_dataset:=$SAMPLE"
+start matrix_ros dataset_player player.log --ros-args -p "dataset:=$SAMPLE" -p rate:=0.5 -p wait_for_subscribers:=3
+frames=$(matrix-tracker info "$SAMPLE" --json | python -c 'import json,sys; print(json.load(sys.stdin)["frames"])')
+"$INSTALL/matrix_bringup/lib/matrix_bringup/graph_monitor" --ros-args -p "views:=$VIEWS" \
+  -p "expected_frames:=$frames" -p idle_timeout:=60.0 -p "out_dir:=$OUT" 2> "$OUT/monitor.log"
+echo "logs: $OUT/{calib,register,player,monitor}.log"

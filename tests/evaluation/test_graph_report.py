@@ -1,0 +1,50 @@
+"""Scores and picture of the graph monitor, on the real sample's calibrations."""
+
+import numpy as np
+import pytest
+
+from matrix_core.datasets import MatrixDataset
+from matrix_core.evaluation.graph_report import (ground_homography_error_m, overview_image, score_view_frame,
+                                                 summary_table)
+from matrix_core.geometry.camera import Camera, pose_matrix
+
+
+@pytest.fixture(scope='module')
+def ds(matrix_sample):
+    return MatrixDataset(matrix_sample)
+
+
+def _shifted(cam: Camera, dx: float) -> Camera:
+    """The same camera moved dx metres along world x."""
+    world_T_cam = cam.world_T_cam.copy()
+    world_T_cam[0, 3] += dx
+    return Camera(cam.K, np.linalg.inv(world_T_cam), cam.width, cam.height, cam.dist)
+
+
+def test_perfect_estimates_score_zero_and_shifts_are_measured(ds):
+    truth = ds.camera('D2', 1)
+    perfect = score_view_frame('D2', 1.5, truth, ds.area, truth, 'ok', 0.9, truth.ground_H_img())
+    assert perfect.rot_err_deg == pytest.approx(0, abs=1e-3) and perfect.centre_err_m == pytest.approx(0, abs=1e-9)
+    assert perfect.reg_ground_err_m == pytest.approx(0, abs=1e-6)
+    moved = _shifted(truth, 0.3)
+    # a camera moved by 0.3 m sees the ground shifted by 0.3 m: the homography error says so
+    assert ground_homography_error_m(moved.ground_H_img(), truth, ds.area) == pytest.approx(0.3, abs=1e-6)
+    bad = score_view_frame('D2', 1.5, truth, ds.area, moved, 'failed: too few inliers', 0.1, None)
+    assert bad.centre_err_m == pytest.approx(0.3) and bad.reg_ground_err_m is None
+
+
+def test_summary_table_and_picture(ds):
+    scores = [score_view_frame(v, 1.0, ds.camera(v, 0), ds.area, ds.camera(v, 0), 'ok', 0.8,
+                               ds.camera(v, 0).ground_H_img()) for v in ds.views[:3]]
+    scores.append(score_view_frame('D4', 1.0, ds.camera('D4', 0), ds.area))
+    table = summary_table(scores, ['D1', 'D2', 'D3', 'D4'])
+    assert table.splitlines()[-2].split()[:3] == ['all', '4', '3']
+    assert ' D4      1     0        -' in table
+    images = {v: ds.load_image(v, 0) for v in ds.views[:2]}
+    cams = {v: ds.camera(v, 0) for v in ds.views[:2]}
+    truth_only = overview_image(images, cams, ds.area, thumb_width=320)
+    assert truth_only.shape == (180, 640, 3)
+    # the projected area outline is drawn in white
+    assert (truth_only == 255).all(axis=2).sum() > 500
+    both = overview_image(images, cams, ds.area, cams, {v: c.ground_H_img() for v, c in cams.items()}, thumb_width=320)
+    assert (both == [0, 220, 0]).all(axis=2).sum() > 100  # published calibration in green
