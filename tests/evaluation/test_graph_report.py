@@ -46,5 +46,6 @@ def test_summary_table_and_picture(ds):
     assert truth_only.shape == (180, 640, 3)
     # the projected area outline is drawn in white
     assert (truth_only == 255).all(axis=2).sum() > 500
-    both = overview_image(images, cams, ds.area, cams, {v: c.ground_H_img() for v, c in cams.items()}, thumb_width=320)
-    assert (both == [0, 220, 0]).all(axis=2).sum() > 100  # published calibration in green
+    est = overview_image(images, cams, ds.area, cams, thumb_width=320).astype(int)
+    green = (est[:, :, 1] > 180) & (est[:, :, 0] < 60) & (est[:, :, 2] < 60)
+    assert green.sum() > 300  # published calibration drawn in green over the white truth
