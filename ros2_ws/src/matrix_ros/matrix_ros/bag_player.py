@@ -1,0 +1,149 @@
+"""``bag_player``: publish a rosbag2 (MCAP or SQLite) into the live graph, with ``/clock``.
+
+Messages are published exactly as recorded (serialized bytes, no re-encoding) on their recorded topics.
+Messages with the same bag time form one frame. Two pacings:
+
+- ``rate``: frames follow the recorded timing scaled by ``rate`` (2.0 = twice as fast);
+- ``lockstep``: the next frame is published only after ``lockstep_count`` messages stamped with the
+  current frame's time arrived on ``lockstep_topic`` (e.g. the fuse node's output), or after
+  ``lockstep_timeout`` seconds (logged), so evaluation is deterministic whatever the machine's speed.
+
+``/clock`` (rosgraph_msgs/Clock) carries the bag time of each frame before it is published, so nodes
+started with ``use_sim_time:=true`` follow the recording. When all frames are out the node logs it and,
+with ``exit_when_done``, exits.
+"""
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import rclpy
+from rclpy.duration import Duration
+from rclpy.node import Node
+from rosbags.rosbag2 import Reader
+from rosgraph_msgs.msg import Clock
+
+from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
+from matrix_ros.message_types import message_class
+from matrix_ros.params import parse_node_args, declare_settings
+from matrix_ros.qos import qos_by_name
+
+
+@dataclass
+class BagPlayerSettings:
+    bag: str = field(default='', metadata={'help': 'rosbag2 folder to play'})
+    rate: float = field(default=1.0, metadata={'help': 'speed factor of the recorded timing (without lockstep)'})
+    topics: list[str] = field(default_factory=list, metadata={'help': 'topics to play (empty = all)'})
+    lockstep: bool = field(default=False, metadata={'help': 'wait for lockstep_topic before each next frame'})
+    lockstep_topic: str = field(default='', metadata={'help': 'topic whose stamped messages release the next frame'})
+    lockstep_type: str = field(default='', metadata={'help': 'message type of lockstep_topic, e.g. matrix_msgs/msg/TrackArray'})
+    lockstep_count: int = field(default=1, metadata={'help': 'messages per frame to wait for on lockstep_topic'})
+    lockstep_timeout: float = field(default=30.0, metadata={'help': 'seconds to wait before going on anyway'})
+    wait_for_subscribers: int = field(default=0, metadata={
+        'help': 'before the first frame, wait until every image topic has this many subscribers'})
+    qos: str = field(default='reliable', metadata={'help': 'QoS of the published topics: reliable or sensor_data'})
+    exit_when_done: bool = field(default=True, metadata={'help': 'exit after the last frame'})
+
+    def __post_init__(self):
+        if self.rate <= 0 or self.lockstep_timeout <= 0 or self.lockstep_count < 1:
+            raise ValueError('rate and lockstep_timeout must be positive, lockstep_count >= 1')
+        if self.lockstep and not (self.lockstep_topic and self.lockstep_type):
+            raise ValueError('lockstep needs lockstep_topic and lockstep_type')
+        qos_by_name(self.qos)
+
+
+class BagPlayer(Node):
+    def __init__(self, defaults: BagPlayerSettings):
+        super().__init__('bag_player')
+        self.settings = s = declare_settings(self, BagPlayerSettings, defaults)
+        if not (Path(s.bag) / 'metadata.yaml').is_file():
+            raise FileNotFoundError(f'not a rosbag2 folder (no metadata.yaml): {s.bag}')
+        self.reader = Reader(Path(s.bag))
+        self.reader.open()
+        self.connections = [c for c in self.reader.connections if not s.topics or c.topic in s.topics]
+        qos = qos_by_name(s.qos)
+        self.pubs = {c.topic: self.create_publisher(message_class(c.msgtype), c.topic, qos)
+                     for c in self.connections}
+        self.clock_pub = self.create_publisher(Clock, '/clock', 10)
+        self.released = {}  # stamp (s) -> lockstep messages seen
+        if s.lockstep:
+            self.create_subscription(message_class(s.lockstep_type), s.lockstep_topic, self._on_lockstep, 50)
+        self.get_logger().info(f'playing {s.bag}: {len(self.pubs)} topics, '
+                               + (f'lockstep on {s.lockstep_topic}' if s.lockstep else f'rate {s.rate}'))
+
+    def _on_lockstep(self, msg):
+        stamp = round(stamp_to_seconds(msg.header.stamp), 6)
+        self.released[stamp] = self.released.get(stamp, 0) + 1
+
+    def _spin_for(self, seconds: float, until=lambda: False):
+        deadline = time.monotonic() + seconds
+        while rclpy.ok() and time.monotonic() < deadline and not until():
+            rclpy.spin_once(self, timeout_sec=min(0.05, max(0.0, deadline - time.monotonic())))
+
+    def frames(self):
+        """Yield (bag time ns, [(topic, raw bytes)]) grouped by identical bag time."""
+        group, group_time = [], None
+        for conn, time_ns, raw in self.reader.messages(connections=self.connections):
+            if group and time_ns != group_time:
+                yield group_time, group
+                group = []
+            group_time = time_ns
+            group.append((conn.topic, bytes(raw)))
+        if group:
+            yield group_time, group
+
+    def play(self) -> int:
+        s = self.settings
+        image_pubs = [p for t, p in self.pubs.items() if 'image' in t]
+        if s.wait_for_subscribers:
+            self.get_logger().info(f'waiting for {s.wait_for_subscribers} subscriber(s) on each image topic')
+            self._spin_for(3600, lambda: all(p.get_subscription_count() >= s.wait_for_subscribers
+                                             for p in image_pubs))
+        count, previous_ns, wall_start, bag_start = 0, None, time.monotonic(), None
+        for time_ns, group in self.frames():
+            if not rclpy.ok():
+                break
+            if bag_start is None:
+                bag_start = time_ns
+            elif not s.lockstep:  # recorded timing, scaled
+                due = wall_start + (time_ns - bag_start) * 1e-9 / s.rate
+                self._spin_for(max(0.0, due - time.monotonic()))
+            self.clock_pub.publish(Clock(clock=seconds_to_stamp(time_ns * 1e-9)))
+            for topic, raw in group:
+                self.pubs[topic].publish(raw)
+            count += 1
+            if s.lockstep:
+                stamp = round(time_ns * 1e-9, 6)
+                self._spin_for(s.lockstep_timeout, lambda: self.released.get(stamp, 0) >= s.lockstep_count)
+                if self.released.get(stamp, 0) < s.lockstep_count:
+                    self.get_logger().warning(
+                        f'lockstep: only {self.released.get(stamp, 0)}/{s.lockstep_count} messages on '
+                        f'{s.lockstep_topic} for t={stamp:.3f} s after {s.lockstep_timeout} s; going on')
+            previous_ns = time_ns
+        # Reliable subscribers must get the last frame before the process exits.
+        for pub in self.pubs.values():
+            pub.wait_for_all_acked(Duration(seconds=5.0))
+        self.get_logger().info(f'played {count} frames'
+                               + (f' up to t={previous_ns * 1e-9:.3f} s' if previous_ns else ''))
+        return count
+
+
+def main(argv=None) -> int:
+    cli, argv = parse_node_args(BagPlayerSettings, argv, __doc__)
+    rclpy.init(args=argv)
+    node = BagPlayer(cli)
+    try:
+        played = node.play()
+        if not node.settings.exit_when_done:
+            rclpy.spin(node)
+    except KeyboardInterrupt:
+        played = 0
+    finally:
+        node.reader.close()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0 if played else 1
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
