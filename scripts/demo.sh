@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# `make demo`: replay the real MATRIX sample through the ROS 2 graph (separate processes over DDS),
+# `make demo`: turn the real MATRIX sample into a rosbag2 and replay it through the ROS 2 graph (separate processes over DDS),
 # print the scores and write pictures to out/demo/. Run inside scripts/env.sh (the Makefile does).
 # The same graph on a full ROS 2 install: ros2 launch matrix_bringup calib_register.launch.py dataset:=...
 set -euo pipefail
@@ -23,11 +23,25 @@ start() {  # start PACKAGE EXECUTABLE LOG ARGS...: a node in its own process, lo
   pids+=($!)
 }
 
-echo "== graph: dataset_player -> calib (8 drones) + register (8 drones) -> graph_monitor (ROS_DOMAIN_ID=$ROS_DOMAIN_ID)"
+BAG=$OUT/matrix_sample_bag
+if [ ! -f "$BAG/metadata.yaml" ]; then
+  echo "== bag: $SAMPLE -> $BAG"
+  rm -rf "$BAG"
+  matrix-tracker bag "$SAMPLE" --out "$BAG"
+fi
+
+echo "== graph: bag_player -> calib (8 drones) + register (8 drones) -> graph_monitor (ROS_DOMAIN_ID=$ROS_DOMAIN_ID)"
 start matrix_calib calib calib.log --ros-args -p "views:=$VIEWS" -p "prior_dataset:=$SAMPLE" -p qos:=reliable
 start matrix_register register register.log --ros-args -p "views:=$VIEWS" -p "reference_dataset:=$SAMPLE"
-start matrix_ros dataset_player player.log --ros-args -p "dataset:=$SAMPLE" -p rate:=0.5 -p wait_for_subscribers:=3
 frames=$(matrix-tracker info "$SAMPLE" --json | python -c 'import json,sys; print(json.load(sys.stdin)["frames"])')
 "$INSTALL/matrix_bringup/lib/matrix_bringup/graph_monitor" --ros-args -p "views:=$VIEWS" \
-  -p "expected_frames:=$frames" -p idle_timeout:=60.0 -p "out_dir:=$OUT" 2> "$OUT/monitor.log"
+  -p "expected_frames:=$frames" -p idle_timeout:=120.0 -p "out_dir:=$OUT" 2> "$OUT/monitor.log" &
+monitor=$!
+# DDS discovery of the result topics (homography, camera_info) takes a moment; the player itself
+# waits until every image topic has its three subscribers.
+sleep 5
+# Lockstep: the next frame leaves the bag only when the monitor saw every drone's homography of the last.
+start matrix_ros bag_player player.log --ros-args -p "bag:=$BAG" -p wait_for_subscribers:=3 \
+  -p lockstep:=true -p lockstep_topic:=/graph_monitor/frame_done -p lockstep_type:=std_msgs/msg/Header
+wait "$monitor"
 echo "logs: $OUT/{calib,register,player,monitor}.log"

@@ -4,6 +4,8 @@ Per view ``V`` it subscribes ``/V/camera_info`` (from ``calib``), ``/V/homograph
 ``/V/ground_truth/camera_info`` and ``/V/image_raw`` (from the player). When ``expected_frames`` frames
 have arrived complete for every view, or nothing arrived for ``idle_timeout`` seconds, it prints the
 summary table, writes ``out_dir/graph_overview.png`` and ``out_dir/graph_scores.csv``, and exits.
+Each frame for which every view's homography arrived is announced on ``/graph_monitor/frame_done``
+(std_msgs/Header with the frame's stamp), which a ``bag_player`` in lockstep waits for.
 Exit code 1 if no frame could be scored at all.
 """
 
@@ -18,6 +20,7 @@ import rclpy
 from matrix_msgs.msg import HomographyStamped
 from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, Image
+from std_msgs.msg import Header
 
 from matrix_core.evaluation.graph_report import overview_image, score_view_frame, summary_table
 from matrix_ros.conversions import ConversionError, camera_info_to_camera, msg_to_image, stamp_to_seconds
@@ -29,7 +32,10 @@ from matrix_ros.qos import qos_by_name
 class GraphMonitorSettings:
     views: list[str] = field(default_factory=lambda: [f'D{i}' for i in range(1, 9)],
                              metadata={'help': 'views to score'})
-    expected_frames: int = field(default=0, metadata={'help': 'stop after this many complete frames (0 = idle only)'})
+    expected_frames: int = field(default=0, metadata={
+        'help': 'stop after this many frames were registered by every view (0 = on idle_timeout only)'})
+    settle_time: float = field(default=3.0, metadata={
+        'help': 'after expected_frames were registered, stop once nothing arrived for this long, seconds'})
     idle_timeout: float = field(default=30.0, metadata={'help': 'stop when nothing arrived for this long, seconds'})
     area: list[float] = field(default_factory=lambda: [0.0, -30.0, 30.0, 0.0], metadata={
         'help': 'scene ground x_min y_min x_max y_max (internal world metres) for the scores and picture'})
@@ -56,6 +62,8 @@ class GraphMonitor(Node):
                                      lambda m, v=view: self._homography(v, m), 50)
             self.create_subscription(Image, f'/{view}/image_raw', lambda m, v=view: self._image(v, m),
                                      qos_by_name('reliable', depth=2))
+        self.frame_done_pub = self.create_publisher(Header, '/graph_monitor/frame_done', 10)
+        self.announced = set()
         self.create_timer(0.5, self._check)
 
     def _key(self, view, msg):
@@ -69,7 +77,12 @@ class GraphMonitor(Node):
             self.get_logger().error(f'{view}: unusable CameraInfo: {exc}')
 
     def _homography(self, view, msg):
-        self.homography[self._key(view, msg)] = msg
+        key = self._key(view, msg)
+        self.homography[key] = msg
+        stamp = key[1]
+        if stamp not in self.announced and all((v, stamp) in self.homography for v in self.settings.views):
+            self.announced.add(stamp)
+            self.frame_done_pub.publish(msg.header)
 
     def _image(self, view, msg):
         try:
@@ -77,17 +90,15 @@ class GraphMonitor(Node):
         except ConversionError as exc:
             self.get_logger().error(f'{view}: unusable image: {exc}')
 
-    def _complete_frames(self) -> int:
-        stamps = {k[1] for k in self.truth}
-        return sum(all((v, t) in self.estimated and (v, t) in self.homography for v in self.settings.views)
-                   for t in stamps)
-
     def _check(self):
         s = self.settings
-        if s.expected_frames and self._complete_frames() >= s.expected_frames:
-            self.get_logger().info(f'{s.expected_frames} complete frames received')
+        quiet = time.monotonic() - self.last_arrival
+        # Calibration publishes nothing for a drone without a good pose yet: once every frame's
+        # homographies are in, a short quiet period means nothing more is coming.
+        if s.expected_frames and len(self.announced) >= s.expected_frames and quiet > s.settle_time:
+            self.get_logger().info(f'{s.expected_frames} frames registered by every view')
             self.finish()
-        elif time.monotonic() - self.last_arrival > s.idle_timeout:
+        elif quiet > s.idle_timeout:
             self.get_logger().info(f'nothing arrived for {s.idle_timeout:.0f} s')
             self.finish()
 

@@ -72,7 +72,8 @@ class BagPlayer(Node):
                                + (f'lockstep on {s.lockstep_topic}' if s.lockstep else f'rate {s.rate}'))
 
     def _on_lockstep(self, msg):
-        stamp = round(stamp_to_seconds(msg.header.stamp), 6)
+        header = msg if hasattr(msg, 'frame_id') else msg.header  # a std_msgs/Header or a stamped message
+        stamp = round(stamp_to_seconds(header.stamp), 6)
         self.released[stamp] = self.released.get(stamp, 0) + 1
 
     def _spin_for(self, seconds: float, until=lambda: False):
