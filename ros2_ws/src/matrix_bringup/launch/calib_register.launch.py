@@ -1,7 +1,8 @@
-"""Replay a MATRIX-format folder through per-drone calibration and registration, scored live.
+"""Replay a sequence bag through per-drone calibration and registration, scored live (what `make demo` runs).
 
-Starts: dataset_player (images + ground-truth CameraInfo), calib (all drones in one process),
-register (all drones in one process) and graph_monitor (prints the scores and writes a picture).
+Starts: bag_player (in lockstep with the monitor), calib (all drones in one process), register (all
+drones in one process) and graph_monitor (prints the scores, writes a picture, announces finished frames).
+Make the bag with `matrix-tracker bag DATASET --out BAG`.
 """
 
 from launch import LaunchDescription
@@ -17,9 +18,11 @@ def generate_launch_description():
     dataset = LaunchConfiguration('dataset')
     views = LaunchConfiguration('views')
     args = [
-        DeclareLaunchArgument('dataset', description='MATRIX-format folder to replay (with reference/)'),
+        DeclareLaunchArgument('bag', description='sequence bag to replay (matrix-tracker bag DATASET --out BAG)'),
+        DeclareLaunchArgument('dataset', description='the MATRIX-format folder the bag came from (its reference/ '
+                              'gives the registration references and the first calibration prior)'),
+        DeclareLaunchArgument('frames', default_value='0', description='frames in the bag (the monitor stops after them)'),
         DeclareLaunchArgument('views', default_value=VIEWS, description='drones to run'),
-        DeclareLaunchArgument('rate', default_value='0.5', description='playback speed factor (1 = 2 frames/s)'),
         DeclareLaunchArgument('calib_config', default_value=PathJoinSubstitution(
             [FindPackageShare('matrix_calib'), 'config', 'matrix_sample.yaml']),
             description='calibration scene YAML (boards, intrinsics)'),
@@ -33,9 +36,10 @@ def generate_launch_description():
         Node(package='matrix_register', executable='register', name='register', output='screen',
              parameters=[{'views': views, 'reference_dataset': dataset}]),
         Node(package='matrix_bringup', executable='graph_monitor', name='graph_monitor', output='screen',
-             parameters=[{'views': views, 'out_dir': LaunchConfiguration('out_dir')}]),
-        Node(package='matrix_ros', executable='dataset_player', name='dataset_player', output='screen',
-             parameters=[{'dataset': dataset, 'views': views, 'rate': LaunchConfiguration('rate'),
-                          'wait_for_subscribers': 3}]),
+             parameters=[{'views': views, 'out_dir': LaunchConfiguration('out_dir'),
+                          'expected_frames': LaunchConfiguration('frames')}]),
+        Node(package='matrix_ros', executable='bag_player', name='bag_player', output='screen',
+             parameters=[{'bag': LaunchConfiguration('bag'), 'wait_for_subscribers': 3, 'lockstep': True,
+                          'lockstep_topic': '/graph_monitor/frame_done', 'lockstep_type': 'std_msgs/msg/Header'}]),
     ]
     return LaunchDescription(args + nodes)
