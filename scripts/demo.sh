@@ -15,7 +15,15 @@ echo "== dataset"
 matrix-tracker info "$SAMPLE"
 
 pids=()
-cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; wait 2>/dev/null || true; }
+cleanup() {  # SIGTERM every node, then SIGKILL what is still there after 10 s: no orphans
+  for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
+  for _ in $(seq 100); do
+    alive=0; for p in "${pids[@]}"; do kill -0 "$p" 2>/dev/null && alive=1; done
+    [ $alive = 0 ] && break; sleep 0.1
+  done
+  for p in "${pids[@]}"; do kill -9 "$p" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+}
 trap cleanup EXIT INT TERM
 start() {  # start PACKAGE EXECUTABLE LOG ARGS...: a node in its own process, logging to OUT/LOG
   local pkg=$1 exe=$2 log=$3; shift 3

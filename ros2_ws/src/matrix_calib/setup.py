@@ -21,5 +21,5 @@ setup(
     description="Per-drone camera calibration from ground checkerboards, every frame (PnP): publishes CameraInfo, pose and diagnostics.",
     license='Apache-2.0',
     # Node executables are added here by the issue that implements each node.
-    entry_points={'console_scripts': []},
+    entry_points={'console_scripts': ['calib = matrix_calib.calib_node:main']},
 )

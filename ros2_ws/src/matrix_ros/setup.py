@@ -23,5 +23,6 @@ setup(
     entry_points={'console_scripts': [
         'dataset_player = matrix_ros.dataset_player:main',
         'bag_player = matrix_ros.bag_player:main',
+        'recorder = matrix_ros.recorder:main',
     ]},
 )

@@ -2,12 +2,14 @@
 :mod:`matrix_core.settings`), and the standard ``main`` of a node that takes both."""
 
 import argparse
+import signal
 import sys
 import typing
 
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor, ParameterType
 from rclpy.parameter import Parameter
+from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from matrix_core.settings import add_settings_arguments, settings_fields, settings_from_namespace
@@ -60,19 +62,26 @@ def parse_node_args(cls, argv=None, description: str = ''):
     return settings_from_namespace(cls, ns), argv
 
 
-def spin_node(node_factory, cls, argv=None, description: str = '') -> int:
-    """Standard node ``main``: CLI flags -> defaults, ``rclpy.init``, build the node, spin until Ctrl-C."""
+def spin_node(node_factory, cls, argv=None, description: str = '', on_exit=None) -> int:
+    """Standard node ``main``: CLI flags -> defaults, ``rclpy.init``, build the node, spin until SIGINT/SIGTERM.
+
+    Signals are handled here rather than by rclpy's handlers: a flag checked between short spins makes
+    the node stop (and ``on_exit(node)`` run, e.g. to close a bag) whenever the signal arrives.
+    """
     cli_settings, argv = parse_node_args(cls, argv, description)
-    rclpy.init(args=argv)
+    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    stop = []
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.append(True))
     node = None
     try:
         node = node_factory(cli_settings)
-        rclpy.spin(node)
-    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
-        pass
+        while not stop and rclpy.ok():
+            rclpy.spin_once(node, timeout_sec=0.1)
     finally:
         if node is not None:
+            if on_exit is not None:
+                on_exit(node)
             node.destroy_node()
-        if rclpy.ok():
-            rclpy.shutdown()
+        rclpy.try_shutdown()
     return 0

@@ -1,0 +1,132 @@
+"""The installed ``calib`` node, in its own process, calibrates real MATRIX images that another process
+(``dataset_player``) publishes over DDS; this test process checks its CameraInfo, pose and diagnostics
+against the stored calibration, and that corrupt input is logged without stopping the node."""
+
+import subprocess
+import time
+
+import numpy as np
+import pytest
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import PoseStamped
+from rclpy.node import Node
+from sensor_msgs.msg import CameraInfo, CompressedImage
+
+from matrix_core.datasets import MatrixDataset
+from matrix_core.geometry.camera import rotation_angle_deg
+from matrix_ros.conversions import camera_info_to_camera, pose_to_world_T_cam, stamp_to_seconds
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+VIEWS = ('D1', 'D5')  # two drones hosted by one calib process
+FRAMES = 5  # frames published, each must come back (ok, or stale with its age)
+PUBLISHED = FRAMES
+
+
+def _spin_until(node, done, processes, timeout_s):
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline and not done() and all(p.poll() is None for p in processes):
+        rclpy.spin_once(node, timeout_sec=0.1)
+
+
+def _stop(processes):
+    outs = []
+    for p in processes:
+        p.terminate()
+        try:
+            outs.append(p.communicate(timeout=20)[0])
+        except subprocess.TimeoutExpired:
+            p.kill()
+            outs.append(p.communicate()[0])
+    return '\n'.join(outs)
+
+
+def test_calib_node_matches_stored_calibration(matrix_sample, node_executable):
+    dataset = MatrixDataset(matrix_sample)
+    rclpy.init()
+    node = Node('calib_test_listener')
+    got = {(v, kind): [] for v in VIEWS for kind in ('info', 'pose')}
+    diags = []
+    for v in VIEWS:
+        node.create_subscription(CameraInfo, f'/{v}/camera_info', lambda m, v=v: got[(v, 'info')].append(m), 10)
+        node.create_subscription(PoseStamped, f'/{v}/pose', lambda m, v=v: got[(v, 'pose')].append(m), 10)
+    node.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 50)
+    calib = subprocess.Popen(
+        [str(node_executable('matrix_calib', 'calib')), '--ros-args', '-p', f'views:=[{",".join(VIEWS)}]',
+         '-p', f'prior_dataset:={matrix_sample}', '-p', 'qos:=reliable',
+         # intrinsics (only K, D, size) from the player's stored CameraInfo stream, as a drone driver would send
+         '-p', 'intrinsics_topic:=ground_truth/camera_info'],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    # Start the images only once calib's outputs are matched to this listener: results published before
+    # discovery finishes would be lost (volatile durability), and the tracker would start mid-sequence.
+    outputs = [f'/{v}/{t}' for v in VIEWS for t in ('camera_info', 'pose')]
+    _spin_until(node, lambda: all(node.count_publishers(t) >= 1 for t in outputs), [calib], 30)
+    time.sleep(1.0)
+    player = subprocess.Popen(
+        [str(node_executable('matrix_ros', 'dataset_player')), '--ros-args', '-p', f'dataset:={matrix_sample}',
+         '-p', f'views:=[{",".join(VIEWS)}]', '-p', f'max_frames:={PUBLISHED}', '-p', 'rate:=0.4',
+         '-p', 'wait_for_subscribers:=1'],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        _spin_until(node, lambda: all(len(x) >= FRAMES for x in got.values()) and len(diags) >= len(VIEWS) * FRAMES,
+                    [calib, player], 120)
+    finally:
+        out = _stop([player, calib])
+        node.destroy_node()
+        rclpy.shutdown()
+    status_of = {(st.hardware_id, stamp_to_seconds(d.header.stamp)): st for d in diags for st in d.status}
+    for v in VIEWS:
+        infos, poses = got[(v, 'info')], got[(v, 'pose')]
+        assert len(infos) >= FRAMES and len(poses) >= FRAMES, f'{v}: missing output; processes said:\n{out}'
+        ok = 0
+        for info, pose in zip(infos, poses):
+            assert info.header.stamp == pose.header.stamp
+            stamp = stamp_to_seconds(info.header.stamp)
+            index = int(round((stamp - 1.0) / 0.5))  # the player stamps frame i with 1.0 s + 0.5 s * i
+            status = status_of.get((v, stamp))
+            assert status is not None, f'{v}: no diagnostics for the image stamped {stamp}'
+            cam = camera_info_to_camera(info)
+            assert np.all(np.isfinite(info.p))
+            np.testing.assert_allclose(pose_to_world_T_cam(pose), cam.world_T_cam, atol=1e-6)
+            truth = dataset.camera(v, dataset.frames[index])
+            np.testing.assert_allclose(cam.K, truth.K, atol=0.05)
+            if status.message.startswith('ok') or status.level == DiagnosticStatus.OK:
+                ok += 1
+                assert rotation_angle_deg(cam.R, truth.R) < 0.5, f'{v} frame {index}'
+                assert np.linalg.norm(cam.center - truth.center) < 0.3, f'{v} frame {index}'
+            else:  # stale: the last good pose, with its age
+                age = float({kv.key: kv.value for kv in status.values}['age_s'])
+                assert status.level == DiagnosticStatus.WARN and age >= 0.5
+        assert ok >= FRAMES - 1, f'{v}: only {ok} fresh poses; processes said:\n{out}'
+    assert 'intrinsics from ground_truth/camera_info' in out, out
+    statuses = [s for d in diags for s in d.status if s.name.startswith('calib/')]
+    assert len(statuses) >= len(VIEWS) * FRAMES
+    keys = {kv.key for kv in statuses[0].values}
+    assert {'status', 'reprojection_rms_px', 'corners', 'age_s', 'latency_s'} <= keys
+
+
+def test_calib_node_survives_bad_input(matrix_sample, node_executable):
+    rclpy.init()
+    node = Node('calib_bad_input_test')
+    pub = node.create_publisher(CompressedImage, '/D5/image/compressed', 10)
+    diags = []
+    node.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 10)
+    calib = subprocess.Popen(
+        [str(node_executable('matrix_calib', 'calib')), '--ros-args', '-p', 'views:=[D5]', '-p', 'compressed:=true',
+         '-p', f'prior_dataset:={matrix_sample}', '-p', 'qos:=reliable'],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    good = (matrix_sample / 'image_subsets/D5/0000.jpg').read_bytes()
+    try:
+        _spin_until(node, lambda: pub.get_subscription_count() > 0, [calib], 30)
+        for data in (b'', b'\xff\xd8 not a jpeg', good):
+            pub.publish(CompressedImage(format='jpeg', data=data))
+            _spin_until(node, lambda: False, [calib], 1.0)
+        _spin_until(node, lambda: len(diags) >= 1, [calib], 60)
+        alive = calib.poll() is None
+    finally:
+        out = _stop([calib])
+        node.destroy_node()
+        rclpy.shutdown()
+    assert alive, f'calib died on bad input:\n{out}'
+    assert 'empty compressed image' in out and 'corrupt compressed image' in out, out
+    assert len(diags) == 1, 'the good image after the bad ones must still be processed'

@@ -1,0 +1,137 @@
+"""Grow a pose's support to every visible board corner, and correct it by whole squares if needed.
+
+The detected pieces often cover only part of a board (people, the image border and the search itself stop
+them); a pose from 40-60 corners in one part of the image can be 0.3-0.8 deg off, and a piece assigned
+one square diagonally off (the colours agree) gives a pose 0.35 m off. Once a pose is known to a fraction
+of a square, every board corner AND the virtual corners a few squares beyond the board are predicted.
+Each is refined with ``cornerSubPix`` in a view rectified with that pose (squares ``px_per_square`` wide,
+so the window sees a normal checker corner, unlike the 3-6 px high rows of the raw image) and verified:
+it barely moved and the four squares around it form a dark/light saddle of strong contrast.
+
+The verified saddles then decide the whole-square correction ``d``: the true board must cover as many
+verified saddles of the right colour as possible, and ground beyond its edges has none. The corrected
+correspondences (true index = predicted index + ``d``) are returned for the final PnP.
+"""
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from matrix_core.calib.board import Checkerboard
+from matrix_core.calib.regions import image_H_board
+from matrix_core.geometry.camera import Camera
+
+
+@dataclass
+class SaddleMap:
+    """Verification of the predicted (virtual) corners of one board, indices ``lo..hi`` beyond the board.
+
+    ``ij`` (M, 2) virtual indices, ``uv`` (M, 2) refined image pixels, ``polarity`` (M,) +1 when the
+    saddle has the colours corner ``ij`` should have, -1 when they are swapped, 0 when not a saddle.
+    """
+
+    board: Checkerboard
+    ij: np.ndarray
+    uv: np.ndarray
+    polarity: np.ndarray
+
+
+def saddle_map(gray: np.ndarray, camera: Camera, board: Checkerboard, px_per_square: float = 10.0,
+               extend: int = 3, max_move_squares: float = 0.15, min_contrast: float = 20.0) -> SaddleMap:
+    """Refine and verify every corner predicted by ``camera`` from ``-extend`` to ``n - 1 + extend``."""
+    lo_i, lo_j = -extend, -extend
+    hi_i, hi_j = board.nx - 1 + extend, board.ny - 1 + extend
+    J, I = np.mgrid[lo_j:hi_j + 1, lo_i:hi_i + 1]
+    ij = np.stack([I.ravel(), J.ravel()], axis=1)
+    empty = SaddleMap(board, np.zeros((0, 2), int), np.zeros((0, 2)), np.zeros(0))
+    world = board.points(ij[:, 0], ij[:, 1])
+    front = camera.depth(world) > 0
+    uv = np.full((len(ij), 2), np.nan)
+    uv[front] = camera.project(world[front])
+    ok = front & np.isfinite(uv).all(axis=1)
+    ok[ok] = camera.in_image(uv[ok], margin=4.0)
+    if not ok.any():
+        return empty
+    ij = ij[ok]
+    # Rectified view: pixel (p, q) <-> corner coordinates (lo - 1 + p / s, lo - 1 + q / s).
+    o_i, o_j = lo_i - 1.0, lo_j - 1.0
+    size = (int(round((hi_i - o_i + 1) * px_per_square)), int(round((hi_j - o_j + 1) * px_per_square)))
+    ij_H_rect = np.array([[1.0 / px_per_square, 0.0, o_i], [0.0, 1.0 / px_per_square, o_j], [0.0, 0.0, 1.0]])
+    img_H_rect = image_H_board(camera, board) @ ij_H_rect
+    rect = cv2.warpPerspective(gray, img_H_rect, size, flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
+    pred = (ij - [o_i, o_j]) * px_per_square
+    half = max(2, int(px_per_square * 0.4))
+    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.01)
+    refined = cv2.cornerSubPix(rect, pred.astype(np.float32).reshape(-1, 1, 2).copy(), (half, half),
+                               (-1, -1), criteria).reshape(-1, 2).astype(np.float64)
+    moved = np.linalg.norm(refined - pred, axis=1) / px_per_square
+    d = 0.3 * px_per_square
+    smooth = cv2.GaussianBlur(rect, (3, 3), 0).astype(np.float32)
+    quad = []
+    for dx, dy in ((-d, -d), (d, -d), (d, d), (-d, d)):
+        pts = (refined + [dx, dy]).astype(np.float32)
+        quad.append(cv2.remap(smooth, pts[:, 0].reshape(1, -1), pts[:, 1].reshape(1, -1), cv2.INTER_LINEAR)[0])
+    q = np.array(quad)
+    # The square towards -i, -j of corner (i, j) is cell (i, j): light when its sign is +1.
+    # A saddle needs BOTH squares of one diagonal brighter than both of the other: at the board's outer
+    # edge two of the four samples are ground, which cancels in a plain diagonal difference but not here.
+    light_first = np.minimum(q[0], q[2]) - np.maximum(q[1], q[3])
+    dark_first = np.minimum(q[1], q[3]) - np.maximum(q[0], q[2])
+    sign = board.cell_sign(ij[:, 0], ij[:, 1])
+    polarity = np.where(light_first >= min_contrast, 1, np.where(dark_first >= min_contrast, -1, 0)) * sign
+    polarity[moved > max_move_squares] = 0
+    back = cv2.perspectiveTransform(refined.reshape(-1, 1, 2), img_H_rect).reshape(-1, 2)
+    return SaddleMap(board, ij, back, polarity)
+
+
+def saddle_counts(maps: list, max_shift: int = 2) -> dict:
+    """(di, dj) -> number of verified saddles of the right colour that the board covers under that
+    whole-square correction, for |di|, |dj| <= ``max_shift``.
+
+    All boards share one correction (a camera translation moves every board alike); this assumes boards
+    with the same square size and axes, as in MATRIX scenes.
+    """
+    counts = {}
+    for di in range(-max_shift, max_shift + 1):
+        for dj in range(-max_shift, max_shift + 1):
+            parity = 1 if (di + dj) % 2 == 0 else -1
+            count = 0
+            for m in maps:
+                t = m.ij + [di, dj]
+                inside = (t[:, 0] >= 0) & (t[:, 0] < m.board.nx) & (t[:, 1] >= 0) & (t[:, 1] < m.board.ny)
+                count += int(np.sum(inside & (m.polarity == parity)))
+            counts[(di, dj)] = count
+    return counts
+
+
+def best_correction(maps: list, max_shift: int = 2, margin: int = 8) -> tuple:
+    """(correction or None, saddles it covers): the whole-square correction the saddles support.
+
+    The current assignment ``(0, 0)`` is kept unless another correction covers at least ``margin`` more
+    saddles (a board edge in view); None when two different corrections both beat it but not each other
+    by ``margin`` (ambiguous: the deciding edges are out of view).
+    """
+    counts = saddle_counts(maps, max_shift)
+    ranked = sorted(counts, key=lambda d: (-counts[d], abs(d[0]) + abs(d[1])))
+    best = ranked[0]
+    if best == (0, 0) or counts[best] - counts[(0, 0)] < margin:
+        return (0, 0), counts[(0, 0)]
+    runner_up = ranked[1]
+    if counts[best] - counts[runner_up] < margin:
+        return None, counts[best]
+    return best, counts[best]
+
+
+def corrected_correspondences(maps: list, correction: tuple) -> tuple:
+    """(N, 3) world points and (N, 2) pixels of the verified corners under ``correction``."""
+    di, dj = correction
+    parity = 1 if (di + dj) % 2 == 0 else -1
+    world, uv = [], []
+    for m in maps:
+        t = m.ij + [di, dj]
+        keep = ((t[:, 0] >= 0) & (t[:, 0] < m.board.nx) & (t[:, 1] >= 0) & (t[:, 1] < m.board.ny)
+                & (m.polarity == parity))
+        world.append(m.board.points(t[keep, 0], t[keep, 1]))
+        uv.append(m.uv[keep])
+    return np.concatenate(world) if world else np.zeros((0, 3)), np.concatenate(uv) if uv else np.zeros((0, 2))

@@ -1,0 +1,122 @@
+"""The calibration scene loaded from YAML: boards, camera intrinsics, optional initial poses.
+
+YAML layout (every position in the INTERNAL world frame: right-handed, metres, z up; for MATRIX data
+internal y = -(file y)):
+
+.. code-block:: yaml
+
+    image_size: [1920, 1080]
+    intrinsics:                      # internal pixel-centre convention (MATRIX file cx 960 -> 959.5)
+      K: [fx, 0, cx, 0, fy, cy, 0, 0, 1]
+      dist: [k1, k2, p1, p2, k3]     # optional, zeros by default
+    boards:
+      - {name: A, origin: [x, y, z], square: 0.25, inner_corners: [19, 19],
+         axis_i: [1, 0, 0], axis_j: [0, -1, 0], first_cell_light: true}
+    initial_poses:                   # optional prior of the first frame, per view (world -> camera)
+      D1: {rvec: [..], tvec: [..]}
+
+Unknown keys are rejected so that a typo never silently falls back to a default.
+"""
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from matrix_core.calib.board import Checkerboard
+from matrix_core.geometry.camera import Camera
+
+CONFIG_PACKAGE = 'matrix_calib'
+DEFAULT_CONFIG_NAME = 'matrix_sample.yaml'
+_TOP_KEYS = {'image_size', 'intrinsics', 'boards', 'initial_poses'}
+_BOARD_KEYS = {'name', 'origin', 'square', 'inner_corners', 'axis_i', 'axis_j', 'first_cell_light'}
+
+
+@dataclass
+class CalibScene:
+    """Boards, intrinsics (K (3, 3), dist (5,), image size) and initial priors (view -> :class:`Camera`)."""
+
+    boards: list
+    K: np.ndarray
+    dist: np.ndarray
+    image_size: tuple
+    initial_poses: dict = field(default_factory=dict)
+
+    def camera(self, cam_T_world: np.ndarray) -> Camera:
+        """A :class:`Camera` with this scene's intrinsics at the given (4, 4) world -> camera pose."""
+        return Camera(self.K, cam_T_world, int(self.image_size[0]), int(self.image_size[1]), self.dist)
+
+    def with_intrinsics(self, K, dist, image_size) -> 'CalibScene':
+        """A copy with other intrinsics (e.g. from a CameraInfo stream)."""
+        return CalibScene(self.boards, np.asarray(K, float).reshape(3, 3), np.asarray(dist, float).reshape(5),
+                          tuple(int(v) for v in image_size), dict(self.initial_poses))
+
+
+def _check_keys(where: str, got: dict, allowed: set) -> None:
+    unknown = set(got) - allowed
+    if unknown:
+        raise ValueError(f'{where}: unknown keys {sorted(unknown)} (allowed: {sorted(allowed)})')
+
+
+def scene_from_dict(data: dict, where: str = 'calibration config') -> CalibScene:
+    """Build a :class:`CalibScene` from the parsed YAML mapping; raises ValueError naming the problem."""
+    if not isinstance(data, dict):
+        raise ValueError(f'{where}: expected a mapping at the top level')
+    _check_keys(where, data, _TOP_KEYS)
+    if not data.get('boards'):
+        raise ValueError(f'{where}: no boards')
+    boards = []
+    for k, b in enumerate(data['boards']):
+        _check_keys(f'{where} boards[{k}]', b, _BOARD_KEYS)
+        try:
+            boards.append(Checkerboard(
+                name=str(b.get('name', f'board{k}')), origin=tuple(float(v) for v in b['origin']),
+                square=float(b['square']), inner_corners=tuple(int(v) for v in b['inner_corners']),
+                axis_i=tuple(float(v) for v in b.get('axis_i', (1, 0, 0))),
+                axis_j=tuple(float(v) for v in b.get('axis_j', (0, 1, 0))),
+                first_cell_light=bool(b.get('first_cell_light', True))))
+        except KeyError as exc:
+            raise ValueError(f'{where} boards[{k}]: missing {exc}') from None
+    intr = data.get('intrinsics') or {}
+    _check_keys(f'{where} intrinsics', intr, {'K', 'dist'})
+    if 'K' not in intr or 'image_size' not in data:
+        raise ValueError(f'{where}: intrinsics.K and image_size are required')
+    K = np.asarray(intr['K'], dtype=np.float64).reshape(3, 3)
+    dist = np.zeros(5)
+    d = np.asarray(intr.get('dist', []), dtype=np.float64).reshape(-1)
+    dist[:min(5, len(d))] = d[:5]
+    size = tuple(int(v) for v in data['image_size'])
+    if not np.all(np.isfinite(K)) or abs(np.linalg.det(K)) < 1e-9 or len(size) != 2 or min(size) <= 0:
+        raise ValueError(f'{where}: invalid intrinsics K {K.tolist()} or image_size {size}')
+    scene = CalibScene(boards, K, dist, size)
+    for view, pose in (data.get('initial_poses') or {}).items():
+        _check_keys(f'{where} initial_poses.{view}', pose, {'rvec', 'tvec'})
+        cam = Camera.from_rvec_tvec(K, pose['rvec'], pose['tvec'], size[0], size[1], dist)
+        scene.initial_poses[str(view)] = cam
+    return scene
+
+
+def default_config_path(name: str = DEFAULT_CONFIG_NAME) -> Path:
+    """Path of a config shipped in ``matrix_calib/config`` (source tree, then every ament prefix)."""
+    candidates = [Path(__file__).resolve().parents[3] / CONFIG_PACKAGE / 'config' / name]
+    for prefix in os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep):
+        if prefix:
+            candidates.append(Path(prefix) / 'share' / CONFIG_PACKAGE / 'config' / name)
+    for path in candidates:
+        if path.is_file():
+            return path
+    raise FileNotFoundError(f'calibration config {name} not found in {[str(c) for c in candidates]}')
+
+
+def load_scene(path=None) -> CalibScene:
+    """Load a scene YAML (``None`` or '' = the shipped MATRIX sample config)."""
+    path = default_config_path() if not path else Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f'calibration config not found: {path}')
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ValueError(f'{path}: not valid YAML: {exc}') from exc
+    return scene_from_dict(data, str(path))

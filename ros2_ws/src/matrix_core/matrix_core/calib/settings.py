@@ -1,0 +1,70 @@
+"""Settings of the calibration component: CLI flags of ``matrix-tracker calibrate`` and ROS parameters of
+the ``calib`` node, same names and defaults (see ``matrix_core.settings``)."""
+
+from dataclasses import dataclass, field
+
+
+@dataclass
+class CalibSettings:
+    config: str = field(default='', metadata={
+        'help': 'scene YAML: boards, intrinsics, optional initial poses (see matrix_calib/config/*.yaml); '
+                'empty = the MATRIX sample config shipped with matrix_core'})
+    px_per_square: float = field(default=10.0, metadata={
+        'help': 'each board is searched in a view rectified with the prior pose, squares this many pixels wide'})
+    margin_cells: float = field(default=3.0, metadata={
+        'help': 'squares of margin around the board in the rectified view (covers the prior error)'})
+    initial_margin_cells: float = field(default=10.0, metadata={
+        'help': 'margin while the prior is still the configured/reference pose (it can be metres off)'})
+    motion_scale: float = field(default=0.5, metadata={
+        'help': 'image scale of the ORB ground homography from the previous (or reference) image to the '
+                'current one, which carries the prior into the current image (0 = off)'})
+    global_shift_scale: float = field(default=0.125, metadata={
+        'help': 'image scale of the phase correlation used when the ground homography fails (0 = off)'})
+    pattern_size: int = field(default=5, metadata={
+        'help': 'smallest grid (n x n inner corners) findChessboardCornersSB looks for; LARGER grows it'})
+    max_pieces_per_board: int = field(default=1, metadata={
+        'help': 'detection is repeated after masking each found piece, at most this many times per board'})
+    refine_subpixel: bool = field(default=False, metadata={
+        'help': 'refine detected corners in the raw image with cornerSubPix (worse on MATRIX: rows 3-6 px apart)'})
+    grow_corners: bool = field(default=True, metadata={
+        'help': 'after a first pose, refine and verify every predicted board corner and solve again'})
+    full_search: bool = field(default=True, metadata={
+        'help': 'search the whole image (about 1.5 s) when the rectified views found nothing'})
+    ambiguity_ratio: float = field(default=0.95, metadata={
+        'help': 'a corner assignment scoring at least this fraction of the best one (checker-colour '
+                'evidence) is a rival; rivals the prior cannot separate make the piece ambiguous (rejected)'})
+    max_index_error: float = field(default=2.5, metadata={
+        'help': 'assignments further than this many squares from the prior prediction are not considered'})
+    index_separation: float = field(default=0.6, metadata={
+        'help': 'the prior separates two rival assignments when one is closer to its prediction by this '
+                'many squares'})
+    max_prior_rotation_deg: float = field(default=35.0, metadata={
+        'help': 'orientation hypotheses whose rotation differs from the prior by more than this are dropped'})
+    ransac_threshold_px: float = field(default=2.0, metadata={'help': 'PnP RANSAC inlier threshold, pixels'})
+    max_reprojection_px: float = field(default=0.8, metadata={
+        'help': 'a pose whose RMS reprojection error exceeds this is rejected (status stale)'})
+    min_corners: int = field(default=12, metadata={'help': 'fewer inlier corners than this -> stale'})
+    max_jump_m: float = field(default=2.0, metadata={
+        'help': 'a camera centre further than this from the previous good one is an implausible jump'})
+    max_jump_deg: float = field(default=25.0, metadata={
+        'help': 'a rotation further than this from the previous good one is an implausible jump'})
+    initial_prior_jump_m: float = field(default=8.0, metadata={
+        'help': 'jump limit while the prior is still the configured/reference pose (it can be metres off)'})
+    initial_prior_jump_deg: float = field(default=45.0, metadata={
+        'help': 'rotation jump limit while the prior is still the configured/reference pose'})
+
+    def __post_init__(self):
+        if self.pattern_size < 3:
+            raise ValueError('pattern_size must be >= 3')
+        if self.px_per_square < 3 or self.margin_cells < 0 or self.initial_margin_cells < 0:
+            raise ValueError('px_per_square must be >= 3, margin_cells and initial_margin_cells >= 0')
+        if not 0 <= self.global_shift_scale <= 1:
+            raise ValueError('global_shift_scale must be in [0, 1]')
+        if not 0 < self.ambiguity_ratio < 1:
+            raise ValueError('ambiguity_ratio must be in (0, 1)')
+        for name in ('ransac_threshold_px', 'max_reprojection_px', 'max_jump_m', 'max_jump_deg',
+                     'initial_prior_jump_m', 'initial_prior_jump_deg', 'max_prior_rotation_deg'):
+            if getattr(self, name) <= 0:
+                raise ValueError(f'{name} must be positive')
+        if self.min_corners < 6 or self.max_pieces_per_board < 1:
+            raise ValueError('min_corners must be >= 6 and max_pieces_per_board >= 1')

@@ -1,0 +1,228 @@
+"""Per-drone calibration tracker: one :meth:`DroneCalibrator.process` call per image.
+
+Status of each result:
+    - ``ok``: a fresh pose from this image;
+    - ``stale``: no acceptable pose in this image (too few corners, ambiguous, implausible jump, high
+      reprojection error); ``camera`` is the last good pose and ``age_s`` says how old it is;
+    - ``failed``: no good pose yet (since the start); ``camera`` is None, nothing to publish.
+
+One frame: ORB ground homography from the prior's image (``motion``) -> each board predicted and searched
+in a rectified view (``regions``, ``detection``) -> corners named (``assignment``) -> RANSAC/LM PnP
+(``pnp``) -> every board corner refined, verified, the position corrected by whole squares and checked
+again (``grow``) -> plausibility (reprojection, corners, jump from the prior).
+
+Never returns NaN: a camera is either a finite solved pose or the last good one.
+"""
+
+import time
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from matrix_core.calib.assignment import assign_piece
+from matrix_core.calib.detection import find_pieces
+from matrix_core.calib.pnp import solve_pnp
+from matrix_core.calib.grow import best_correction, corrected_correspondences, saddle_map
+from matrix_core.calib.motion import GroundMotion
+from matrix_core.calib.regions import board_rectification, image_H_board, image_shift, small_gray, translation
+from matrix_core.calib.scene import CalibScene
+from matrix_core.calib.settings import CalibSettings
+from matrix_core.geometry.camera import Camera, rotation_angle_deg
+
+OK, STALE, FAILED = 'ok', 'stale', 'failed'
+GROW_SHIFT = 4  # largest whole-square correction considered (the initial prior can be squares off)
+
+
+@dataclass
+class CalibResult:
+    """One frame's outcome; ``camera`` is None only when ``status == 'failed'``."""
+
+    status: str
+    camera: Camera = None
+    age_s: float = 0.0
+    rms_px: float = float('nan')
+    corners: int = 0
+    pieces_found: int = 0
+    pieces_assigned: int = 0
+    full_search: bool = False
+    motion: str = ''
+    message: str = ''
+    timings_s: dict = field(default_factory=dict)
+
+
+class DroneCalibrator:
+    """Calibrates one drone's camera frame after frame.
+
+    Args:
+        scene: boards and intrinsics.
+        settings: thresholds.
+        initial_prior: pose prior of the first frame (reference calibration or configured), or None.
+        initial_image: (H, W[, 3]) image taken at ``initial_prior`` (the reference image), optional: used
+            to predict where the boards moved in the first frame.
+    """
+
+    def __init__(self, scene: CalibScene, settings: CalibSettings, initial_prior: Camera = None,
+                 initial_image: np.ndarray = None):
+        self.scene = scene
+        self.settings = settings
+        self.prior = None if initial_prior is None else scene.camera(initial_prior.cam_T_world)
+        self.prior_is_initial = True
+        self.last_good = None
+        self.last_good_stamp = None
+        self.motion = GroundMotion(settings.motion_scale) if settings.motion_scale > 0 else None
+        self.previous_features = None
+        self.previous_small = None
+        if initial_image is not None:
+            self._remember(self._gray(initial_image))
+
+    def _remember(self, gray: np.ndarray):
+        """Keep what the next frame needs to measure the image motion (features of the prior's image)."""
+        if self.motion is not None:
+            self.previous_features = self.motion.features(gray)
+        if self.settings.global_shift_scale > 0:
+            self.previous_small = small_gray(gray, self.settings.global_shift_scale)
+
+    def _image_motion(self, gray: np.ndarray):
+        """(cur_H_prev (3, 3) or None, how it was measured, this image's motion data).
+
+        "prev" is the image the prior pose belongs to (the last good frame, or the reference image)."""
+        s = self.settings
+        H, how = None, 'none'
+        features = self.motion.features(gray) if self.motion is not None else None
+        if features is not None and self.previous_features is not None:
+            H, inliers = self.motion.homography(self.previous_features, features)
+            how = f'homography ({inliers} inliers)' if H is not None else f'homography failed ({inliers})'
+        small = small_gray(gray, s.global_shift_scale) if s.global_shift_scale > 0 else None
+        if H is None and small is not None and self.previous_small is not None:
+            H, how = translation(image_shift(self.previous_small, small, s.global_shift_scale)), 'shift'
+        return H, how, (features, small)
+
+    @staticmethod
+    def _gray(image: np.ndarray) -> np.ndarray:
+        if image is None or image.size == 0 or image.dtype != np.uint8 or image.ndim not in (2, 3):
+            raise ValueError('expected a non-empty uint8 (H, W) or (H, W, 3) image')
+        return image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+
+    def set_intrinsics(self, K, dist, image_size) -> None:
+        """Use other intrinsics from now on (e.g. from a CameraInfo stream)."""
+        self.scene = self.scene.with_intrinsics(K, dist, image_size)
+        if self.prior is not None:
+            self.prior = self.scene.camera(self.prior.cam_T_world)
+
+    def _stale(self, stamp: float, message: str, **kw) -> CalibResult:
+        if self.last_good is None:
+            return CalibResult(FAILED, None, message=message, **kw)
+        return CalibResult(STALE, self.last_good, age_s=float(stamp - self.last_good_stamp), message=message, **kw)
+
+    def _saddles(self, gray, camera) -> list:
+        return [saddle_map(gray, camera, board, self.settings.px_per_square, extend=GROW_SHIFT + 1)
+                for board in self.scene.boards]
+
+    def _grow(self, gray, camera):
+        """(PnPResult or None, whole-square correction or None when ambiguous), see :mod:`grow`.
+
+        The grown pose is verified once more: at the final pose the saddles must put the board exactly
+        where the pose does (correction (0, 0)); otherwise the correction counts as ambiguous (None)."""
+        maps = self._saddles(gray, camera)
+        correction, count = best_correction(maps, GROW_SHIFT)
+        if correction is None or count < self.settings.min_corners:
+            return None, correction
+        world, uv = corrected_correspondences(maps, correction)
+        fit = solve_pnp(world, uv, self.scene.camera(np.eye(4)), self.settings.ransac_threshold_px)
+        if fit is None:
+            return None, correction
+        check, _ = best_correction(self._saddles(gray, fit.camera), GROW_SHIFT)
+        return (fit, correction) if check == (0, 0) else (None, None)
+
+    def process(self, image: np.ndarray, stamp: float) -> CalibResult:
+        """Calibrate from one (H, W, 3) BGR or (H, W) grey uint8 image taken at ``stamp`` seconds."""
+        s = self.settings
+        t_start = time.perf_counter()
+        gray = self._gray(image)
+        width, height = self.scene.image_size
+        if gray.shape[:2] != (height, width):
+            raise ValueError(f'image is {gray.shape[1]}x{gray.shape[0]}, intrinsics are for {width}x{height}')
+        timings = {}
+        if self.prior is None:
+            return CalibResult(FAILED, None, message='no pose prior (configure an initial pose)')
+
+        cur_H_prev, motion_how, motion_data = self._image_motion(gray)
+        margin = s.initial_margin_cells if (self.prior_is_initial or cur_H_prev is None) else s.margin_cells
+        predicted = {b.name: image_H_board(self.prior, b, cur_H_prev) for b in self.scene.boards}
+        t = time.perf_counter()
+        timings['motion'] = t - t_start
+        pieces = []
+        for board in self.scene.boards:
+            rect = board_rectification(predicted[board.name], board, self.prior, s.px_per_square, margin)
+            if rect is not None:
+                pieces += find_pieces(gray, rect[0], rect[1], s.pattern_size, s.max_pieces_per_board,
+                                      s.refine_subpixel)
+        full_search = not pieces and s.full_search
+        if full_search:
+            pieces = find_pieces(gray, None, None, s.pattern_size,
+                                 s.max_pieces_per_board * len(self.scene.boards), refine=False)
+        timings['detect'] = time.perf_counter() - t
+        t = time.perf_counter()
+        info = dict(pieces_found=len(pieces), full_search=full_search, timings_s=timings, motion=motion_how)
+
+        smooth = cv2.GaussianBlur(gray, (3, 3), 0).astype(np.float32)
+        jump_m = s.initial_prior_jump_m if self.prior_is_initial else s.max_jump_m
+        jump_deg = s.initial_prior_jump_deg if self.prior_is_initial else s.max_jump_deg
+        world, uv, reasons, assigned = [], [], [], 0
+        used = set()
+        predicted_ij = {name: np.linalg.inv(H) for name, H in predicted.items()}
+        max_index_error = s.max_index_error * (4.0 if (self.prior_is_initial or cur_H_prev is None) else 1.0)
+        for piece in pieces:
+            a, why = assign_piece(piece, self.scene.boards, predicted_ij, self.prior, smooth, max_index_error,
+                                  s.ambiguity_ratio, s.index_separation, max(jump_deg, s.max_prior_rotation_deg),
+                                  2.0 * s.max_reprojection_px)
+            if a is None:
+                reasons.append(why)
+                continue
+            assigned += 1
+            for (i, j), p, w in zip(a.indices, a.image_uv, a.world):
+                if (a.board.name, i, j) not in used:  # a corner found twice counts once
+                    used.add((a.board.name, i, j))
+                    world.append(w)
+                    uv.append(p)
+        timings['assign'] = time.perf_counter() - t
+        info['pieces_assigned'] = assigned
+        t = time.perf_counter()
+        if len(world) < s.min_corners:
+            timings['total'] = time.perf_counter() - t_start
+            why = '; '.join(sorted(set(reasons))) or 'no board piece found'
+            return self._stale(stamp, f'{len(world)} corners assigned (< {s.min_corners}): {why}',
+                               corners=len(world), **info)
+        fit = solve_pnp(np.array(world), np.array(uv), self.scene.camera(np.eye(4)), s.ransac_threshold_px)
+        timings['pnp'] = time.perf_counter() - t
+        timings['total'] = time.perf_counter() - t_start
+        if fit is None:
+            return self._stale(stamp, 'PnP failed', corners=len(world), **info)
+        note = ''
+        if s.grow_corners and fit.inliers.sum() >= s.min_corners:
+            grown, correction = self._grow(gray, fit.camera)
+            if correction is None:
+                timings['total'] = time.perf_counter() - t_start
+                return self._stale(stamp, 'ambiguous board position: the board edges that would decide it '
+                                   'are out of view', corners=int(fit.inliers.sum()), **info)
+            if grown is not None:
+                fit = grown
+                note = f'grid corrected by {correction} squares' if correction != (0, 0) else ''
+            timings['total'] = time.perf_counter() - t_start
+        n_in = int(fit.inliers.sum())
+        info.update(corners=n_in, rms_px=fit.rms_px)
+        if n_in < s.min_corners:
+            return self._stale(stamp, f'{n_in} PnP inliers (< {s.min_corners})', **info)
+        if fit.rms_px > s.max_reprojection_px:
+            return self._stale(stamp, f'reprojection RMS {fit.rms_px:.2f} px > {s.max_reprojection_px}', **info)
+        move_m = float(np.linalg.norm(fit.camera.center - self.prior.center))
+        turn_deg = rotation_angle_deg(fit.camera.R, self.prior.R)
+        if move_m > jump_m or turn_deg > jump_deg:
+            return self._stale(stamp, f'implausible jump {move_m:.2f} m / {turn_deg:.1f} deg from the prior',
+                               **info)
+        self.prior = self.last_good = fit.camera
+        self.previous_features, self.previous_small = motion_data
+        self.last_good_stamp = stamp
+        self.prior_is_initial = False
+        return CalibResult(OK, fit.camera, 0.0, message=note or 'ok', **info)

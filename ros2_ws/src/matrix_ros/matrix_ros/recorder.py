@@ -1,0 +1,100 @@
+"""``recorder``: write what the graph publishes to a rosbag2 (MCAP), and tracks to MOT-style text.
+
+Every topic in ``topics`` (with its type at the same index of ``types``) is stored as received
+(serialized CDR, no re-encoding), with the node's clock as bag time (the bag's time under
+``use_sim_time``). With ``tracks_topic`` set, each ``matrix_msgs/TrackArray`` also becomes lines
+``frame id x y`` in ``mot_file`` (frame = round((stamp - start_time) / frame_period); metres, world
+frame), the format ``matrix-tracker score`` reads. The bag is closed cleanly on Ctrl-C / SIGTERM.
+"""
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ament_index_python.packages import get_package_share_directory, PackageNotFoundError
+from rclpy.node import Node
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+from matrix_ros.conversions import stamp_to_seconds
+from matrix_ros.message_types import message_class
+from matrix_ros.params import declare_settings, spin_node
+
+
+@dataclass
+class RecorderSettings:
+    out: str = field(default='', metadata={'help': 'bag folder to create (must not exist)'})
+    topics: list[str] = field(default_factory=list, metadata={'help': 'topics to record'})
+    types: list[str] = field(default_factory=list, metadata={'help': 'message type of each topic, e.g. sensor_msgs/msg/CameraInfo'})
+    tracks_topic: str = field(default='', metadata={'help': 'matrix_msgs/TrackArray topic to export as text (empty: none)'})
+    mot_file: str = field(default='', metadata={'help': 'text file for the tracks (default: OUT.tracks.txt)'})
+    start_time: float = field(default=1.0, metadata={'help': 'stamp of frame 0, seconds'})
+    frame_period: float = field(default=0.5, metadata={'help': 'seconds between frames'})
+
+    def __post_init__(self):
+        if len(self.topics) != len(self.types):
+            raise ValueError(f'topics ({len(self.topics)}) and types ({len(self.types)}) must pair up')
+        if self.frame_period <= 0:
+            raise ValueError('frame_period must be positive')
+
+
+def _typestore():
+    """Jazzy's standard types plus this workspace's matrix_msgs (read from its installed .msg files)."""
+    store = get_typestore(Stores.ROS2_JAZZY)
+    try:
+        msg_dir = Path(get_package_share_directory('matrix_msgs')) / 'msg'
+    except PackageNotFoundError:
+        return store
+    types = {}
+    for path in sorted(msg_dir.glob('*.msg')):
+        types.update(get_types_from_msg(path.read_text(), f'matrix_msgs/msg/{path.stem}'))
+    store.register(types)
+    return store
+
+
+class Recorder(Node):
+    def __init__(self, defaults: RecorderSettings):
+        super().__init__('recorder')
+        self.settings = s = declare_settings(self, RecorderSettings, defaults)
+        if not s.out:
+            raise ValueError('parameter out must name the bag folder to create')
+        if Path(s.out).exists():
+            raise FileExistsError(f'{s.out} exists; rosbag2 writes a new folder')
+        store = _typestore()
+        self.writer = Writer(Path(s.out), version=9, storage_plugin=StoragePlugin.MCAP)
+        self.writer.open()
+        self.counts = {}
+        for topic, type_name in zip(s.topics, s.types):
+            conn = self.writer.add_connection(topic, type_name, typestore=store)
+            self.counts[topic] = 0
+            self.create_subscription(message_class(type_name), topic,
+                                     lambda raw, c=conn, t=topic: self._write(c, t, raw), 100, raw=True)
+        self.mot = None
+        if s.tracks_topic:
+            self.mot = open(s.mot_file or f'{s.out}.tracks.txt', 'w')
+            self.create_subscription(message_class('matrix_msgs/msg/TrackArray'), s.tracks_topic, self._tracks, 100)
+        self.get_logger().info(f'recording {len(s.topics)} topics to {s.out}')
+
+    def _write(self, conn, topic, raw: bytes):
+        self.writer.write(conn, self.get_clock().now().nanoseconds, raw)
+        self.counts[topic] += 1
+
+    def _tracks(self, msg):
+        s = self.settings
+        frame = round((stamp_to_seconds(msg.header.stamp) - s.start_time) / s.frame_period)
+        for track in msg.tracks:
+            self.mot.write(f'{frame} {track.id} {track.position.x:.4f} {track.position.y:.4f}\n')
+        self.mot.flush()
+
+    def close(self):
+        self.writer.close()
+        if self.mot is not None:
+            self.mot.close()
+        self.get_logger().info(f'closed {self.settings.out}: ' + ', '.join(f'{t} {n}' for t, n in self.counts.items()))
+
+
+def main(argv=None) -> int:
+    return spin_node(Recorder, RecorderSettings, argv, description=__doc__, on_exit=Recorder.close)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

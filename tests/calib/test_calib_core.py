@@ -1,0 +1,163 @@
+"""Calibration core on the real MATRIX sample: boards, detection, assignment, tracker states, CLI."""
+
+import csv
+
+import cv2
+import numpy as np
+import pytest
+
+from matrix_core.calib.assignment import assign_piece
+from matrix_core.calib.detection import find_pieces
+from matrix_core.calib.evaluation import pose_errors
+from matrix_core.calib.grow import best_correction, saddle_map
+from matrix_core.calib.motion import GroundMotion
+from matrix_core.calib.regions import board_rectification, image_H_board
+from matrix_core.calib.scene import load_scene
+from matrix_core.calib.settings import CalibSettings
+from matrix_core.calib.tracker import FAILED, OK, STALE, DroneCalibrator
+from matrix_core.cli.main import main as cli_main
+from matrix_core.datasets import MatrixDataset, open_dataset
+from matrix_core.datasets import matrix_conventions as conv
+
+cv2.setNumThreads(1)
+
+
+@pytest.fixture(scope='module')
+def dataset(matrix_sample):
+    return MatrixDataset(matrix_sample)
+
+
+@pytest.fixture(scope='module')
+def scene():
+    return load_scene()
+
+
+def _true_indices(camera, board, uv):
+    """(N, 2) index of the projected board corner nearest each pixel, and that distance (N,)."""
+    proj = camera.project(board.corners_world())
+    d = np.linalg.norm(uv[:, None] - proj[None], axis=2)
+    return board.corner_indices()[d.argmin(axis=1)], d.min(axis=1)
+
+
+def test_board_config_matches_the_marker_files(dataset, scene):
+    """Every second board corner is a marker in the Planes 2-D files (ids not in 3d.txt, >= 40)."""
+    for view in ('D1', 'D5'):
+        path = dataset.root / 'matchings/Planes' / f'Camera{conv.drone_number(view)}_2d_0001.txt'
+        table = np.loadtxt(path).reshape(-1, 4)
+        extra = table[(table[:, 1] >= 40) & ~np.isin(table[:, 1], list(dataset.plane_markers))]
+        assert len(extra) > 50
+        uv = conv.pixels_from_file(extra[:, 2:4])
+        cam = scene.camera(dataset.camera(view, 1).cam_T_world)
+        proj = np.concatenate([cam.project(b.corners_world()) for b in scene.boards])
+        d = np.linalg.norm(uv[:, None] - proj[None], axis=2).min(axis=1)
+        assert np.median(d) < 0.1 and d.max() < 0.5, (view, np.median(d), d.max())
+
+
+def test_rectified_search_finds_true_corners_and_assignment_names_them(dataset, scene):
+    """Prior = previous frame's stored pose carried over by the ground motion: pieces lie on true corners
+    and the ones that get named get their true indices."""
+    view, frame = 'D5', 2
+    gray = cv2.cvtColor(dataset.load_image(view, frame), cv2.COLOR_BGR2GRAY)
+    previous = cv2.cvtColor(dataset.load_image(view, frame - 1), cv2.COLOR_BGR2GRAY)
+    motion = GroundMotion()
+    cur_H_prev, inliers = motion.homography(motion.features(previous), motion.features(gray))
+    assert cur_H_prev is not None and inliers >= 40
+    prior = scene.camera(dataset.camera(view, frame - 1).cam_T_world)
+    truth = dataset.camera(view, frame)
+    smooth = cv2.GaussianBlur(gray, (3, 3), 0).astype(np.float32)
+    predicted = {b.name: image_H_board(prior, b, cur_H_prev) for b in scene.boards}
+    ij_from_img = {name: np.linalg.inv(H) for name, H in predicted.items()}
+    named = 0
+    for board in scene.boards:
+        H, size = board_rectification(predicted[board.name], board, prior, 10.0, 3.0)
+        pieces = find_pieces(gray, H, size, pattern_size=5, max_pieces=2, refine=False)
+        assert pieces, f'no piece of board {board.name}'
+        for piece in pieces:
+            idx, dist = _true_indices(truth, board, piece.uv)
+            assert np.median(dist) < 0.5
+            a, why = assign_piece(piece, scene.boards, ij_from_img, prior, smooth)
+            if a is None:  # rejected (ambiguous, or too far from this motion-less prior): allowed
+                continue
+            assert a.board.name == board.name
+            np.testing.assert_array_equal(a.indices, idx)
+            named += 1
+    assert named >= 1  # others may be rejected, never named wrongly
+
+
+def test_saddle_map_corrects_a_pose_one_square_off(dataset, scene):
+    """A pose shifted one square diagonally (same colours) is detected and corrected by the board edges."""
+    gray = cv2.cvtColor(dataset.load_image('D5', 1), cv2.COLOR_BGR2GRAY)
+    truth = scene.camera(dataset.camera('D5', 1).cam_T_world)
+    for shift in ((1, 1), (-1, 1), (0, 0)):
+        board = scene.boards[0]
+        s = board.square * (shift[0] * np.array(board.axis_i) + shift[1] * np.array(board.axis_j))
+        T = truth.cam_T_world.copy()
+        T[:3, 3] = truth.t + truth.R @ s  # camera moved by -s: the scene appears moved by +s
+        wrong = scene.camera(T)
+        maps = [saddle_map(gray, wrong, b) for b in scene.boards]
+        correction, count = best_correction(maps)
+        assert correction == shift, (shift, correction)
+        assert count > 300
+
+
+def test_tracker_follows_drone_5(dataset, scene):
+    """Reference pose as the first prior, then the previous result: every frame ok and accurate."""
+    cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera('D5'),
+                          cv2.imread(str(dataset.reference_image_path('D5'))))
+    for index, frame in enumerate(dataset.frames):
+        r = cal.process(dataset.load_image('D5', frame), 0.5 * index)
+        assert r.status == OK, r.message
+        rot, centre = pose_errors(r.camera, dataset.camera('D5', frame))
+        assert rot < 0.2 and centre < 0.1, (frame, rot, centre)
+        assert r.corners >= 100 and r.rms_px < 1.0
+
+
+def test_stale_keeps_last_good_pose_and_failed_has_none(dataset, scene):
+    cal = DroneCalibrator(scene, CalibSettings(full_search=False), dataset.camera('D5', 0))
+    good = cal.process(dataset.load_image('D5', 0), 10.0)
+    assert good.status == OK
+    blank = np.full((1080, 1920, 3), 128, np.uint8)
+    r = cal.process(blank, 10.5)
+    assert r.status == STALE and r.camera is good.camera and r.age_s == pytest.approx(0.5)
+    assert np.all(np.isfinite(r.camera.cam_T_world))
+    none = DroneCalibrator(scene, CalibSettings(full_search=False), None).process(blank, 0.0)
+    assert none.status == FAILED and none.camera is None
+    with pytest.raises(ValueError):
+        cal.process(np.zeros((0, 0, 3), np.uint8), 11.0)
+    with pytest.raises(ValueError):
+        cal.process(np.zeros((540, 960, 3), np.uint8), 11.0)
+
+
+def test_cli_writes_calibrations_the_reader_reads(dataset, tmp_path, capsys):
+    out = tmp_path / 'calib'
+    assert cli_main(['calibrate', str(dataset.root), '--out', str(out), '--views', 'D5', '--max-frames', '2',
+                     '--compare']) == 0
+    printed = capsys.readouterr().out
+    assert 'vs stored calibration' in printed
+    written = open_dataset(out)
+    assert written.views == ('D5',) and written.frames == (0, 1)
+    for frame in (0, 1):
+        rot, centre = pose_errors(written.camera('D5', frame), dataset.camera('D5', frame))
+        assert rot < 0.2 and centre < 0.1
+    rows = list(csv.DictReader(open(out / 'calibration_status.csv')))
+    assert [r['status'] for r in rows] == ['ok', 'ok']
+
+
+@pytest.mark.slow
+def test_acceptance_real_sample_all_drones(dataset, scene):
+    """Issue 4 acceptance: 8 drones x 5 frames, median <= 0.1 deg / 3 cm, worst <= 0.5 deg / 0.3 m;
+    frames without an acceptable pose must be stale/failed, never wrong. At least 3/4 must be ok (the
+    far, grazing boards of D3 and D7 are not found in some frames)."""
+    rot, centre = [], []
+    for view in dataset.views:
+        cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view),
+                              cv2.imread(str(dataset.reference_image_path(view))))
+        for index, frame in enumerate(dataset.frames):
+            r = cal.process(dataset.load_image(view, frame), 0.5 * index)
+            if r.status == OK:
+                e = pose_errors(r.camera, dataset.camera(view, frame))
+                rot.append(e[0])
+                centre.append(e[1])
+    assert len(rot) >= 30, f'only {len(rot)} of 40 images calibrated'  # 31 measured
+    assert np.median(rot) <= 0.1 and np.median(centre) <= 0.03
+    assert max(rot) <= 0.5 and max(centre) <= 0.3

@@ -1,0 +1,31 @@
+"""Calibration on simulator sequences of all three variants, against the simulator's true poses.
+
+The issue's acceptance asks for >= 50 frames x 8 drones per variant; that takes ~2 min per variant on this
+2-core machine, so this test runs FRAMES frames per variant (CI budget) and
+``scripts/bench_calib.py --sim-frames 50`` runs the full-size check.
+"""
+
+import numpy as np
+import pytest
+
+from matrix_core.calib.cli_support import simulated_sequence
+from matrix_core.calib.evaluation import summarize_errors
+from matrix_core.calib.scene import default_config_path
+from matrix_core.calib.settings import CalibSettings
+from matrix_core.cli.calibrate import calibrate_dataset
+from matrix_core.datasets import open_dataset
+
+FRAMES = 6
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize('variant', ['simple', 'complex', 'modified'])
+def test_simulated_sequences_meet_the_accuracy_limits(variant, tmp_path):
+    data = simulated_sequence(variant, FRAMES, seed=7, out=tmp_path / variant)
+    settings = CalibSettings(config=str(default_config_path(f'sim_{variant}.yaml')))
+    rows = calibrate_dataset(open_dataset(data), tmp_path / 'calib', settings, compare=True)
+    s = summarize_errors(rows)
+    assert s['ok'] >= 0.75 * len(rows), s
+    assert s['rot_median_deg'] <= 0.1 and s['centre_median_m'] <= 0.03, s
+    assert s['rot_max_deg'] <= 0.5 and s['centre_max_m'] <= 0.3, s
+    assert all(np.isfinite(r['rot_err_deg']) for r in rows if r['status'] == 'ok')
