@@ -42,7 +42,13 @@ def test_graph_scores(matrix_sample, node_executable, tmp_path):
         for p in nodes + [player, monitor]:
             if p.poll() is None:
                 p.terminate()
-        logs = [p.communicate(timeout=30)[0] for p in nodes]
+        logs = []
+        for p in nodes + [player, monitor]:
+            try:
+                logs.append(p.communicate(timeout=30)[0])
+            except subprocess.TimeoutExpired:
+                p.kill()
+                logs.append(p.communicate()[0])
     assert monitor.returncode == 0, monitor_out + '\n'.join(logs)
     assert 'played 5 frames' in player_out and 'lockstep: only' not in player_out, player_out
     rows = list(csv.DictReader(open(out / 'graph_scores.csv')))

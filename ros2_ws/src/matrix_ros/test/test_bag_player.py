@@ -24,6 +24,15 @@ def sample_bag(matrix_sample, tmp_path_factory):
                               compressed=True, progress=False)
 
 
+def _finish(process, timeout=30) -> str:
+    """Output of ``process``; it is killed if it has not exited within ``timeout`` (no orphans)."""
+    try:
+        return process.communicate(timeout=timeout)[0]
+    except subprocess.TimeoutExpired:
+        process.kill()
+        return process.communicate()[0] + '\n[killed: did not exit]'
+
+
 def _player(node_executable, bag, *params):
     args = [str(node_executable('matrix_ros', 'bag_player')), '--ros-args', '-p', f'bag:={bag}',
             '-p', 'topics:=[/D3/image/compressed,/D3/ground_truth/camera_info]', '-p', 'wait_for_subscribers:=1']
@@ -44,7 +53,7 @@ def test_replay_is_unchanged_and_publishes_clock(matrix_sample, sample_bag, node
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and (len(got['info']) < 5 or player.poll() is None):
         rclpy.spin_once(node, timeout_sec=0.1)
-    out = player.communicate(timeout=30)[0]
+    out = _finish(player)
     node.destroy_node()
     rclpy.shutdown()
     assert player.returncode == 0, out
@@ -75,9 +84,7 @@ def test_lockstep_waits_for_the_graph(sample_bag, node_executable):
         if acked < len(arrivals) and time.monotonic() - arrivals[acked][0] > 0.8:
             ack.publish(PointStamped(header=arrivals[acked][1]))  # "processed" 0.8 s after arrival
             acked += 1
-    if player.poll() is None:
-        player.kill()
-    out = player.communicate(timeout=30)[0]
+    out = _finish(player, timeout=5)
     node.destroy_node()
     rclpy.shutdown()
     assert player.returncode == 0 and len(arrivals) == 5, out

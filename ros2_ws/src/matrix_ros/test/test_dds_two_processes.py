@@ -45,7 +45,11 @@ def test_image_and_camera_info_cross_process(matrix_sample, node_executable):
         got = _collect(topics, lambda r: all(len(v) >= 2 for v in r.values()), player)
     finally:
         player.terminate()
-        out, _ = player.communicate(timeout=20)
+        try:
+            out, _ = player.communicate(timeout=20)
+        except subprocess.TimeoutExpired:
+            player.kill()
+            out = player.communicate()[0]
         rclpy.shutdown()
     assert len(got['/D3/image_raw']) >= 2, f'no images over DDS; player said:\n{out}'
     assert len(got['/D3/ground_truth/camera_info']) >= 2, f'no CameraInfo over DDS; player said:\n{out}'

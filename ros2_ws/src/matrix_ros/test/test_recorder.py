@@ -27,35 +27,47 @@ def test_records_standard_and_custom_messages(matrix_sample, node_executable, tm
                             '-p', 'types:=[sensor_msgs/msg/CameraInfo,matrix_msgs/msg/TrackArray]',
                             '-p', 'tracks_topic:=/tracks'],
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    rclpy.init()
-    node = rclpy.create_node('recorder_test')
-    info_pub = node.create_publisher(CameraInfo, '/D2/camera_info', 10)
-    track_pub = node.create_publisher(TrackArray, '/tracks', 10)
-    deadline = time.monotonic() + 30
-    while (info_pub.get_subscription_count() < 1 or track_pub.get_subscription_count() < 2) \
-            and time.monotonic() < deadline:
-        rclpy.spin_once(node, timeout_sec=0.1)
-    time.sleep(1.0)  # discovery is not symmetric: let the recorder's side match our publishers too
-    for i in range(3):
-        header = Header(stamp=seconds_to_stamp(1.0 + 0.5 * i), frame_id='world')
-        info_pub.publish(camera_to_camera_info(ds.camera('D2', i), header))
-        track_pub.publish(TrackArray(header=header, tracks=[
-            Track(id=7, position=Point(x=1.0 + i, y=-2.0)), Track(id=9, position=Point(x=5.0, y=-6.5 - i))]))
-    for pub in (info_pub, track_pub):
-        pub.wait_for_all_acked(rclpy.duration.Duration(seconds=5))
-    time.sleep(1.0)
-    rec.send_signal(signal.SIGTERM)
     try:
-        log = rec.communicate(timeout=30)[0]
-    except subprocess.TimeoutExpired:
-        rec.kill()
-        pytest.fail('recorder did not exit on SIGTERM:\n' + rec.communicate()[0])
-    node.destroy_node()
-    rclpy.shutdown()
-    assert rec.returncode == 0, log
-    assert bag_topics(out) == {'/D2/camera_info': ('sensor_msgs/msg/CameraInfo', 3),
-                               '/tracks': ('matrix_msgs/msg/TrackArray', 3)}, log
-    infos = [m.msg for m in read_bag(out, ['/D2/camera_info'])]
-    assert list(infos[2].p) == pytest.approx(list(camera_to_camera_info(ds.camera('D2', 2)).p))
+        _exercise(rec, ds)
+    finally:
+        if rec.poll() is None:
+            rec.kill()
+            rec.communicate()
     lines = (tmp_path / 'rec.tracks.txt').read_text().split('\n')
     assert lines[:4] == ['0 7 1.0000 -2.0000', '0 9 5.0000 -6.5000', '1 7 2.0000 -2.0000', '1 9 5.0000 -7.5000']
+    assert bag_topics(out) == {'/D2/camera_info': ('sensor_msgs/msg/CameraInfo', 3),
+                               '/tracks': ('matrix_msgs/msg/TrackArray', 3)}
+    infos = [m.msg for m in read_bag(out, ['/D2/camera_info'])]
+    assert list(infos[2].p) == pytest.approx(list(camera_to_camera_info(ds.camera('D2', 2)).p))
+
+
+def _exercise(rec, ds):
+    """Publish three frames of CameraInfo and tracks, then SIGTERM the recorder; it must exit cleanly."""
+    rclpy.init()
+    node = rclpy.create_node('recorder_test')
+    try:
+        info_pub = node.create_publisher(CameraInfo, '/D2/camera_info', 10)
+        track_pub = node.create_publisher(TrackArray, '/tracks', 10)
+        deadline = time.monotonic() + 30
+        while (info_pub.get_subscription_count() < 1 or track_pub.get_subscription_count() < 2) \
+                and time.monotonic() < deadline:
+            rclpy.spin_once(node, timeout_sec=0.1)
+        time.sleep(1.0)  # discovery is not symmetric: let the recorder's side match our publishers too
+        for i in range(3):
+            header = Header(stamp=seconds_to_stamp(1.0 + 0.5 * i), frame_id='world')
+            info_pub.publish(camera_to_camera_info(ds.camera('D2', i), header))
+            track_pub.publish(TrackArray(header=header, tracks=[
+                Track(id=7, position=Point(x=1.0 + i, y=-2.0)), Track(id=9, position=Point(x=5.0, y=-6.5 - i))]))
+        for pub in (info_pub, track_pub):
+            pub.wait_for_all_acked(rclpy.duration.Duration(seconds=5))
+        time.sleep(1.0)
+        rec.send_signal(signal.SIGTERM)
+        try:
+            log = rec.communicate(timeout=30)[0]
+        except subprocess.TimeoutExpired:
+            rec.kill()
+            pytest.fail('recorder did not exit on SIGTERM:\n' + rec.communicate()[0])
+    finally:
+        node.destroy_node()
+        rclpy.shutdown()
+    assert rec.returncode == 0, log
