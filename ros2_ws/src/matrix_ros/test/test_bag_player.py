@@ -51,7 +51,8 @@ def test_replay_is_unchanged_and_publishes_clock(matrix_sample, sample_bag, node
     node.create_subscription(Clock, '/clock', got['clock'].append, 10)
     player = _player(node_executable, sample_bag, 'rate:=20.0')
     deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and (len(got['info']) < 5 or player.poll() is None):
+    while time.monotonic() < deadline and (min(len(got['info']), len(got['img']), len(got['clock'])) < 5
+                                           or player.poll() is None):
         rclpy.spin_once(node, timeout_sec=0.1)
     out = _finish(player)
     node.destroy_node()
