@@ -30,6 +30,7 @@ def test_defaults_and_overrides():
     assert parse() == Example()
     s = parse('--rate', '0.5', '--enabled', 'false', '--views', 'D1', 'D3')
     assert (s.rate, s.enabled, s.views) == (0.5, False, ['D1', 'D3'])
+    assert parse('--enabled').enabled is True and parse('--enabled', 'no').enabled is False
     assert [f[0] for f in settings_fields(Example)] == ['rate', 'name', 'enabled', 'views']
     assert settings_fields(Example)[0][3] == 'frames per second'
 

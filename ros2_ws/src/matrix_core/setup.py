@@ -1,3 +1,5 @@
+from glob import glob
+
 from setuptools import find_packages, setup
 
 package_name = 'matrix_core'
@@ -6,9 +8,13 @@ setup(
     name=package_name,
     version='0.1.0',
     packages=find_packages(exclude=['test']),
+    # Scene variants of the simulator, BEV training configs and the shipped BEV checkpoint.
+    package_data={'matrix_core.sim': ['configs/*.yaml'],
+                  'matrix_core.bev': ['configs/*.yaml', 'checkpoints/*.pt']},
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/sim_configs', glob('matrix_core/sim/configs/*.yaml')),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

@@ -39,6 +39,8 @@ def add_settings_arguments(parser: argparse.ArgumentParser, cls) -> None:
             typ, extra = typing.get_args(typ)[0], {'nargs': '*'}
         if typ not in (bool, int, float, str):
             raise TypeError(f'{cls.__name__}.{name}: unsupported setting type {typ}')
+        if typ is bool and not extra:  # `--flag` alone means true; `--flag false` also works
+            extra = {'nargs': '?', 'const': True}
         group.add_argument(f'--{name}', type=_parse_bool if typ is bool else typ, default=default,
                            help=f'{help_text} (default: {default!r})', **extra)
 

@@ -1,0 +1,35 @@
+"""Saving and loading trained BEV models (state dict + the settings they were trained with)."""
+
+import dataclasses
+from pathlib import Path
+
+import torch
+
+from matrix_core.bev.registry import build_model
+from matrix_core.bev.settings import BevSettings
+
+
+def save_checkpoint(path, model, settings: BevSettings, **extra) -> None:
+    """Write ``{'model', 'settings', **extra}`` atomically (a temp file then rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(path.suffix + '.tmp')
+    torch.save({'model': model.state_dict(), 'settings': dataclasses.asdict(settings), **extra}, tmp)
+    tmp.replace(path)
+
+
+def load_checkpoint(path, map_location='cpu') -> dict:
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f'no checkpoint {path}')
+    return torch.load(path, map_location=map_location, weights_only=False)
+
+
+def load_model(path, settings_overrides: dict = None) -> tuple:
+    """(model in eval mode, BevSettings) from a checkpoint; ``settings_overrides`` change decoding only
+    (threshold, NMS, ...) - grid and model fields must match the training ones."""
+    ckpt = load_checkpoint(path)
+    settings = BevSettings(**{**ckpt['settings'], **(settings_overrides or {})})
+    model = build_model(settings.model, temporal=settings.temporal)
+    model.load_state_dict(ckpt['model'])
+    return model.eval(), settings

@@ -1,0 +1,87 @@
+"""Training configuration (YAML) for ``matrix-tracker train``; see ``configs/*.yaml``."""
+
+import dataclasses
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+from matrix_core.bev.settings import BevSettings
+from matrix_core.tracking.settings import TrackerSettings
+
+CONFIG_DIR = Path(__file__).resolve().parent / 'configs'
+
+
+@dataclass
+class SequenceSpec:
+    """One MATRIX folder and the frames and calibration source to use from it."""
+
+    path: str
+    frames: list = None            # [first, last] inclusive, or None for all
+    calibration: str = 'ground_truth'
+    views: list = None             # None: all views
+
+    def frame_list(self, available) -> list:
+        if self.frames is None:
+            return list(available)
+        first, last = self.frames
+        return [f for f in available if first <= f <= last]
+
+
+@dataclass
+class TrainConfig:
+    train: list
+    val: list = field(default_factory=list)
+    bev: BevSettings = field(default_factory=BevSettings)
+    tracker: TrackerSettings = field(default_factory=TrackerSettings)
+    epochs: int = 10
+    max_steps_per_epoch: int = 0   # 0: the whole training set
+    batch_size: int = 1
+    lr: float = 1e-3
+    weight_decay: float = 1e-4
+    view_dropout: float = 0.15     # probability of dropping each view in a training sample
+    min_views: int = 4
+    seed: int = 0
+    num_threads: int = 1
+    validate_every: int = 1        # epochs
+    out_dir: str = 'out/train'
+    cache_images: bool = True
+
+    def __post_init__(self):
+        if not self.train:
+            raise ValueError('config: "train" needs at least one sequence')
+        if self.epochs < 1 or self.batch_size < 1 or not self.lr > 0:
+            raise ValueError('config: epochs and batch_size must be >= 1 and lr > 0')
+        if not 0 <= self.view_dropout < 1:
+            raise ValueError(f'config: view_dropout must be in [0, 1), got {self.view_dropout}')
+
+
+def resolve_config_path(name_or_path) -> Path:
+    """A YAML path, or the name of a shipped config (``configs/<name>.yaml``)."""
+    p = Path(name_or_path)
+    if p.is_file():
+        return p
+    shipped = CONFIG_DIR / f'{name_or_path}.yaml'
+    if shipped.is_file():
+        return shipped
+    known = sorted(q.stem for q in CONFIG_DIR.glob('*.yaml'))
+    raise FileNotFoundError(f'no config file {p} and no shipped config named {name_or_path!r} (shipped: {known})')
+
+
+def load_config(name_or_path, overrides: dict = None) -> TrainConfig:
+    """Read a YAML config; unknown keys are errors (a typo must not be silently ignored)."""
+    path = resolve_config_path(name_or_path)
+    raw = yaml.safe_load(path.read_text()) or {}
+    raw.update(overrides or {})
+    names = {f.name for f in dataclasses.fields(TrainConfig)}
+    unknown = set(raw) - names
+    if unknown:
+        raise ValueError(f'{path}: unknown keys {sorted(unknown)}; allowed: {sorted(names)}')
+    try:
+        raw['train'] = [SequenceSpec(**s) for s in raw.get('train') or []]
+        raw['val'] = [SequenceSpec(**s) for s in raw.get('val') or []]
+        raw['bev'] = BevSettings(**(raw.get('bev') or {}))
+        raw['tracker'] = TrackerSettings(**(raw.get('tracker') or {}))
+        return TrainConfig(**raw)
+    except TypeError as exc:
+        raise ValueError(f'{path}: {exc}') from None

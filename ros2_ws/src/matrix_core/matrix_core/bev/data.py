@@ -1,0 +1,100 @@
+"""Training/evaluation samples from any MATRIX-format folder (real or simulated) for the BEV network."""
+
+import cv2
+import numpy as np
+import torch
+
+from matrix_core.bev.calibration_sources import calibration_source
+from matrix_core.bev.lifting import feat_H_grid
+from matrix_core.bev.settings import BevSettings
+from matrix_core.bev.targets import bev_targets
+from matrix_core.datasets import open_dataset
+
+MEAN = np.array([0.485, 0.456, 0.406], np.float32)
+STD = np.array([0.229, 0.224, 0.225], np.float32)
+
+
+def prepare_image(bgr: np.ndarray, size: tuple) -> np.ndarray:
+    """(H, W, 3) uint8 BGR -> (3, h, w) float32 normalised RGB at ``size`` = (w, h)."""
+    rgb = cv2.cvtColor(cv2.resize(bgr, size, interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2RGB)
+    return ((rgb.astype(np.float32) / 255.0 - MEAN) / STD).transpose(2, 0, 1)
+
+
+def ground_truth_positions(dataset, frame: int) -> dict:
+    """person id -> (2,) world metres: exact trajectories when the folder has them, else annotation cells."""
+    pos = dataset.pedestrian_positions(frame) if hasattr(dataset, 'pedestrian_positions') else {}
+    if pos:
+        return {i: np.asarray(p)[:2] for i, p in pos.items()}
+    return {a.person_id: np.asarray(a.world_xy)[:2] for a in dataset.annotations(frame)}
+
+
+class BevFrames(torch.utils.data.Dataset):
+    """Frames of one MATRIX folder as network inputs plus targets.
+
+    Item ``k`` is a dict: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3) float32, ``view_mask`` (V,) bool,
+    the target arrays of :func:`bev_targets`, ``frame`` int, and ``prev_frame`` (the previous frame of the
+    sequence, -1 for the first). Views missing in ``views`` or whose image cannot be read are masked out.
+
+    Args:
+        root: MATRIX folder.
+        settings: :class:`BevSettings` (grid, input size).
+        frames: frames to use (default: all with images and calibration).
+        calibration: a name in ``CALIBRATION_SOURCES``.
+        views: views to use (default all); the others are masked.
+        cache_images: keep resized images in memory (small datasets).
+    """
+
+    def __init__(self, root, settings: BevSettings, frames=None, calibration: str = 'ground_truth', views=None,
+                 cache_images: bool = True):
+        self.dataset = open_dataset(root)
+        self.settings = settings
+        self.frames = tuple(frames) if frames is not None else tuple(self.dataset.frames)
+        missing = set(self.frames) - set(self.dataset.frames)
+        if missing:
+            raise ValueError(f'{root}: frames {sorted(missing)[:5]} have no images/calibration')
+        self.grid = settings.grid(self.dataset.area)
+        self.homography_of = calibration_source(calibration, self.dataset, self.frames)
+        self.views = tuple(self.dataset.views)
+        self.use_views = set(views) if views else set(self.views)
+        self.input_size = (settings.image_width, settings.image_height)
+        self._cache = {} if cache_images else None
+        self.stride = 4
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    def image(self, view: str, frame: int) -> np.ndarray:
+        key = (view, frame)
+        if self._cache is not None and key in self._cache:
+            return self._cache[key]
+        img = prepare_image(self.dataset.load_image(view, frame), self.input_size)
+        if self._cache is not None:
+            self._cache[key] = img
+        return img
+
+    def homographies(self, frame: int) -> np.ndarray:
+        """(V, 3, 3) float32 ``feat_H_grid`` of every view at ``frame``."""
+        out = []
+        for v in self.views:
+            img_H_ground, size = self.homography_of(v, frame)
+            out.append(feat_H_grid(img_H_ground, self.grid.ground_H_grid, size, self.input_size, self.stride))
+        return np.stack(out).astype(np.float32)
+
+    def inputs(self, frame: int) -> dict:
+        """Network inputs of one frame: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3), ``view_mask`` (V,)."""
+        mask = np.array([v in self.use_views for v in self.views])
+        images = np.zeros((len(self.views), 3, self.input_size[1], self.input_size[0]), np.float32)
+        for i, v in enumerate(self.views):
+            if mask[i]:
+                images[i] = self.image(v, frame)
+        return {'images': torch.from_numpy(images), 'feat_H_grid': torch.from_numpy(self.homographies(frame)),
+                'view_mask': torch.from_numpy(mask)}
+
+    def __getitem__(self, k: int) -> dict:
+        frame = self.frames[k]
+        prev = self.frames[k - 1] if k > 0 else -1
+        pos = ground_truth_positions(self.dataset, frame)
+        prev_pos = ground_truth_positions(self.dataset, prev) if prev >= 0 else None
+        targets = bev_targets(self.grid, pos, prev_pos, self.settings.heatmap_sigma_m)
+        return {**self.inputs(frame), 'frame': frame, 'prev_frame': prev,
+                **{name: torch.from_numpy(arr) for name, arr in targets.items()}}

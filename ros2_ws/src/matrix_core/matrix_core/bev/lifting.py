@@ -1,0 +1,82 @@
+"""Lifting image features onto the BEV grid with each frame's own image-to-ground homography.
+
+Convention:
+    - ``img``: full-resolution image pixels (pixel centres, see ``geometry/camera.py``);
+    - ``feat``: pixels of a feature map that covers the image with ``stride`` input pixels per feature
+      pixel after the image was resized to the network input size (pixel centres as well);
+    - ``grid``: BEV cell indices (col, row), see :class:`~matrix_core.geometry.grid.BevGrid`.
+    ``feat_H_grid`` maps grid cells to feature pixels; it is what :func:`warp_to_grid` samples with.
+"""
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+
+def pixel_scale_homography(sx: float, sy: float) -> np.ndarray:
+    """``big_H_small`` for pixel-centre coordinates when 1 small pixel = (sx, sy) big pixels:
+    u_big = (u_small + 0.5) * sx - 0.5."""
+    return np.array([[sx, 0.0, 0.5 * sx - 0.5], [0.0, sy, 0.5 * sy - 0.5], [0.0, 0.0, 1.0]])
+
+
+def orient_ground_homography(img_H_ground: np.ndarray, image_size: tuple) -> np.ndarray:
+    """Fix the overall sign of a ground homography so that its third output is the (positive) depth of
+    points in front of the camera, as ``Camera.img_H_ground`` gives it.
+
+    A homography estimated up to scale (e.g. by registration) may come with either sign; the image
+    centre of a camera looking down sees the ground in front of it, so its ground point must have a
+    positive homogeneous coordinate.
+    """
+    w, h = image_size
+    g = np.linalg.solve(img_H_ground, np.array([(w - 1) / 2.0, (h - 1) / 2.0, 1.0]))
+    return img_H_ground if g[2] > 0 else -img_H_ground
+
+
+def feat_H_grid(img_H_ground: np.ndarray, ground_H_grid: np.ndarray, image_size: tuple,
+                input_size: tuple, stride: int) -> np.ndarray:
+    """(3, 3) homography from BEV cells to feature-map pixels.
+
+    Args:
+        img_H_ground: (3, 3) ground metres -> full-resolution image pixels (this frame's calibration).
+        ground_H_grid: (3, 3) grid cells -> ground metres (``BevGrid.ground_H_grid``).
+        image_size: (width, height) of the full-resolution image.
+        input_size: (width, height) the image is resized to before the encoder.
+        stride: input pixels per feature pixel.
+    """
+    img_H_ground = orient_ground_homography(np.asarray(img_H_ground, dtype=np.float64), image_size)
+    img_H_input = pixel_scale_homography(image_size[0] / input_size[0], image_size[1] / input_size[1])
+    input_H_feat = pixel_scale_homography(stride, stride)
+    feat_H_img = np.linalg.inv(img_H_input @ input_H_feat)
+    return feat_H_img @ img_H_ground @ ground_H_grid
+
+
+def warp_to_grid(features: torch.Tensor, feat_H_grid: torch.Tensor, grid_shape: tuple) -> tuple:
+    """Sample feature maps at every BEV cell.
+
+    Args:
+        features: (N, C, h, w) feature maps (N = batch x views).
+        feat_H_grid: (N, 3, 3) grid cells -> feature pixels, depth-positive (see :func:`feat_H_grid`).
+        grid_shape: (rows, cols) of the BEV grid.
+
+    Returns:
+        (bev (N, C, rows, cols), seen (N, 1, rows, cols) float): ``seen`` is 1 where the cell lies in front
+        of the camera and inside the feature map; ``bev`` is 0 elsewhere.
+    """
+    n, _, h, w = features.shape
+    rows, cols = grid_shape
+    dev, dt = features.device, features.dtype
+    r, c = torch.meshgrid(torch.arange(rows, device=dev, dtype=dt), torch.arange(cols, device=dev, dtype=dt),
+                          indexing='ij')
+    cells = torch.stack([c, r, torch.ones_like(c)], dim=-1).reshape(1, -1, 3)       # (1, R*C, 3)
+    uvw = cells @ feat_H_grid.to(dt).transpose(1, 2)                                 # (N, R*C, 3)
+    depth = uvw[..., 2]
+    in_front = depth > 1e-9
+    uv = uvw[..., :2] / torch.where(in_front, depth, torch.ones_like(depth)).unsqueeze(-1)
+    inside = in_front & (uv[..., 0] >= -0.5) & (uv[..., 0] <= w - 0.5) & (uv[..., 1] >= -0.5) & (uv[..., 1] <= h - 0.5)
+    # grid_sample with align_corners=False: -1 and +1 are the outer edges of the border pixels.
+    norm = torch.stack([(uv[..., 0] + 0.5) / w * 2 - 1, (uv[..., 1] + 0.5) / h * 2 - 1], dim=-1)
+    norm = torch.where(inside.unsqueeze(-1), norm, torch.full_like(norm, -2.0))
+    bev = F.grid_sample(features, norm.reshape(n, rows, cols, 2), mode='bilinear', padding_mode='zeros',
+                        align_corners=False)
+    seen = inside.reshape(n, 1, rows, cols).to(dt)
+    return bev * seen, seen

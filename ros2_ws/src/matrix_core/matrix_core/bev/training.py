@@ -1,0 +1,146 @@
+"""Training loop of the BEV network: seeded, resumable, with progress bars, checkpoints and periodic
+validation (validation itself lives in ``evaluation.py``)."""
+
+import dataclasses
+import json
+import os
+import random
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from matrix_core.bev.checkpoint import load_checkpoint, save_checkpoint
+from matrix_core.bev.config import TrainConfig
+from matrix_core.bev.data import BevFrames
+from matrix_core.bev.evaluation import evaluate
+from matrix_core.bev.losses import bev_loss
+from matrix_core.bev.registry import build_model
+
+TARGET_KEYS = ('heatmap', 'offset', 'tracking', 'center_mask', 'tracking_mask')
+
+
+def seed_everything(seed: int) -> None:
+    random.seed(seed)
+    np.random.seed(seed)
+    torch.manual_seed(seed)
+
+
+def open_sequences(specs: list, config: TrainConfig) -> list:
+    """A :class:`BevFrames` per sequence spec (paths may use ``$MATRIX_SHARED`` and ``~``)."""
+    out = []
+    for spec in specs:
+        path = Path(os.path.expanduser(os.path.expandvars(spec.path)))
+        probe = BevFrames(path, config.bev, calibration=spec.calibration, views=spec.views,
+                          cache_images=config.cache_images)
+        frames = spec.frame_list(probe.frames)
+        out.append(probe if frames == list(probe.frames) else
+                   BevFrames(path, config.bev, frames, spec.calibration, spec.views, config.cache_images))
+    return out
+
+
+def drop_views(mask: torch.Tensor, p: float, min_views: int, rng: np.random.Generator) -> torch.Tensor:
+    """Randomly switch off views of a (V,) bool mask with probability ``p`` each, keeping >= min_views."""
+    present = np.flatnonzero(mask.numpy())
+    drop = present[rng.random(len(present)) < p]
+    drop = drop[:max(len(present) - min_views, 0)]
+    out = mask.clone()
+    out[torch.as_tensor(drop, dtype=torch.long)] = False
+    return out
+
+
+def _batch(items: list) -> dict:
+    return {k: torch.stack([it[k] for it in items]) for k in items[0] if isinstance(items[0][k], torch.Tensor)}
+
+
+def training_step(model, sequences, picks, config: TrainConfig, rng) -> dict:
+    """Loss terms of one batch; ``picks`` = [(sequence index, item index)]. With temporal fusion, the
+    previous frame's BEV features are computed first (no gradient) and fed in."""
+    items, prev_inputs, prev_valid = [], [], []
+    for si, k in picks:
+        seq = sequences[si]
+        item = seq[k]
+        item['view_mask'] = drop_views(item['view_mask'], config.view_dropout, config.min_views, rng)
+        items.append(item)
+        has_prev = k > 0
+        prev_valid.append(has_prev)
+        if config.bev.temporal:
+            x = seq.inputs(seq.frames[k - 1] if has_prev else seq.frames[k])
+            x['view_mask'] = drop_views(x['view_mask'], config.view_dropout, config.min_views, rng)
+            prev_inputs.append(x)
+    batch = _batch(items)
+    grid_shape = sequences[picks[0][0]].grid.shape
+    previous = valid = None
+    if config.bev.temporal:
+        p = _batch(prev_inputs)
+        with torch.no_grad():
+            previous = model(p['images'], p['feat_H_grid'], p['view_mask'], grid_shape)['bev']
+        valid = torch.tensor(prev_valid)
+    out = model(batch['images'], batch['feat_H_grid'], batch['view_mask'], grid_shape, previous, valid)
+    targets = {k: batch[k] for k in TARGET_KEYS}
+    if not config.bev.temporal or not any(prev_valid):
+        targets['tracking_mask'] = torch.zeros_like(targets['tracking_mask'])
+    return bev_loss(out, targets)
+
+
+def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: bool = True, log=print) -> list:
+    """Train; returns the history (one dict per epoch). Writes ``last.pt`` every epoch, ``best.pt`` at the
+    best validation MODA, ``history.json``; ``resume`` continues from ``last.pt`` (same config)."""
+    from tqdm import tqdm
+
+    out_dir = Path(out_dir or config.out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    torch.set_num_threads(config.num_threads)
+    seed_everything(config.seed)
+    sequences = open_sequences(config.train, config)
+    shapes = {s.grid.shape for s in sequences}
+    if len(shapes) != 1:
+        raise ValueError(f'training sequences have different BEV grids {shapes}: set bev.area in the config')
+    val_sequences = open_sequences(config.val, config) if config.val else []
+    model = build_model(config.bev.model, temporal=config.bev.temporal)
+    optimizer = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay)
+    start_epoch, history, best = 0, [], -np.inf
+    last = out_dir / 'last.pt'
+    if resume and last.is_file():
+        ckpt = load_checkpoint(last)
+        model.load_state_dict(ckpt['model'])
+        optimizer.load_state_dict(ckpt['optimizer'])
+        start_epoch, history, best = ckpt['epoch'], ckpt['history'], ckpt['best']
+        torch.set_rng_state(ckpt['torch_rng'])
+        log(f'resumed from {last} after epoch {start_epoch}')
+    index = [(si, k) for si, s in enumerate(sequences) for k in range(len(s))]
+    for epoch in range(start_epoch, config.epochs):
+        rng = np.random.default_rng(config.seed * 1000 + epoch)
+        order = [index[i] for i in rng.permutation(len(index))]
+        batches = [order[i:i + config.batch_size] for i in range(0, len(order), config.batch_size)]
+        if config.max_steps_per_epoch:
+            batches = batches[:config.max_steps_per_epoch]
+        model.train()
+        sums = {}
+        bar = tqdm(batches, desc=f'epoch {epoch + 1}/{config.epochs}', unit='batch', disable=not progress)
+        for picks in bar:
+            terms = training_step(model, sequences, picks, config, rng)
+            optimizer.zero_grad()
+            terms['total'].backward()
+            torch.nn.utils.clip_grad_norm_(model.parameters(), 10.0)
+            optimizer.step()
+            for k, v in terms.items():
+                sums[k] = sums.get(k, 0.0) + float(v.detach())
+            bar.set_postfix(loss=f'{float(terms["total"].detach()):.3f}')
+        record = {'epoch': epoch + 1, **{f'loss_{k}': v / max(len(batches), 1) for k, v in sums.items()}}
+        if val_sequences and ((epoch + 1) % config.validate_every == 0 or epoch + 1 == config.epochs):
+            model.eval()
+            results = [evaluate(model, s, config.tracker, progress=progress) for s in val_sequences]
+            record['val_moda'] = float(np.mean([r.detection.moda for r in results]))
+            record['val_mota'] = float(np.mean([r.tracking.mota for r in results]))
+            record['val_idf1'] = float(np.mean([r.tracking.idf1 for r in results]))
+            if record['val_moda'] > best:
+                best = record['val_moda']
+                save_checkpoint(out_dir / 'best.pt', model, config.bev, epoch=epoch + 1, metrics=record)
+        history.append(record)
+        log(' '.join(f'{k}={v:.4f}' if isinstance(v, float) else f'{k}={v}' for k, v in record.items()))
+        save_checkpoint(last, model, config.bev, optimizer=optimizer.state_dict(), epoch=epoch + 1,
+                        history=history, best=best, torch_rng=torch.get_rng_state(),
+                        config=json.loads(json.dumps(dataclasses.asdict(config), default=str)))
+        (out_dir / 'history.json').write_text(json.dumps(history, indent=2))
+    return history

@@ -1,0 +1,196 @@
+"""Scene configuration of the simulator: plain dataclasses loaded from a YAML file.
+
+A config file describes ONE scene variant (area, floor, block, checkerboards, crowd, drones, buildings). The
+three shipped variants live in ``matrix_core/sim/configs/{simple,complex,modified}.yaml``; users can pass
+the path of their own file. Unknown keys are rejected so that typos do not silently fall back to defaults.
+
+Convention: internal world frame (right-handed, metres, z up, ground z = 0). The real MATRIX square is
+x in [0, 30], y in [-30, 0]; areas must stay inside it because MATRIX positionIDs are a 300 x 300 grid of
+0.1 m cells.
+"""
+
+import dataclasses
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+CONFIG_DIR = Path(__file__).resolve().parent / 'configs'
+VARIANTS = ('simple', 'complex', 'modified')
+POSITION_GRID_EXTENT = (0.0, -30.0, 30.0, 0.0)  # internal (x_min, y_min, x_max, y_max) of the positionID grid
+
+
+@dataclass
+class BoxConfig:
+    """Axis-aligned box standing on the ground (the central block, pillars)."""
+
+    center: list = field(default_factory=lambda: [15.0, -15.0])
+    size: list = field(default_factory=lambda: [5.0, 5.0])
+    height: float = 10.0
+    color: list = field(default_factory=lambda: [20, 20, 110])  # BGR of the lit side
+    stripes: bool = False  # horizontal stripes of a darker shade (the "modified" block)
+
+    def __post_init__(self):
+        if len(self.center) != 2 or len(self.size) != 2 or min(self.size) <= 0 or self.height <= 0:
+            raise ValueError(f'box needs center [x, y], positive size [sx, sy] and height, got {self}')
+        if len(self.color) != 3:
+            raise ValueError(f'box color must be [b, g, r], got {self.color}')
+
+    @property
+    def bounds(self) -> tuple:
+        """(x_min, y_min, x_max, y_max) metres."""
+        (cx, cy), (sx, sy) = self.center, self.size
+        return (cx - sx / 2, cy - sy / 2, cx + sx / 2, cy + sy / 2)
+
+
+@dataclass
+class BoardConfig:
+    """A checkerboard lying on the ground: ``squares`` x ``squares`` squares of ``square_m``.
+
+    ``origin`` is its (x_min, y_min) corner; square (i, j) is black when i + j is even. The inner corners
+    are at ``origin + square_m * (i, j)``, i, j = 1..squares-1, on the plane z = ``z`` (0.1 m in MATRIX).
+    """
+
+    origin: list = field(default_factory=lambda: [5.5, -26.0])
+    squares: int = 20
+    square_m: float = 0.25
+    z: float = 0.1
+
+    def __post_init__(self):
+        if len(self.origin) != 2 or self.squares < 3 or self.square_m <= 0:
+            raise ValueError(f'invalid checkerboard {self}')
+
+    @property
+    def bounds(self) -> tuple:
+        side = self.squares * self.square_m
+        return (self.origin[0], self.origin[1], self.origin[0] + side, self.origin[1] + side)
+
+
+@dataclass
+class CrowdConfig:
+    """Pedestrians: count, body sizes and walking behaviour (social-force model, see ``crowd.py``)."""
+
+    count: int = 40
+    speed: float = 1.2  # preferred walking speed, m/s
+    speed_std: float = 0.1
+    height_range: list = field(default_factory=lambda: [1.6, 1.9])  # body height, metres
+    body_radius: float = 0.22  # shoulders
+    leg_radius: float = 0.16  # = the 0.16 m annotation cylinder, so the annotated foot point is on the body
+    keep_out_margin: float = 0.5  # metres kept free around the block and inside the area border
+
+    def __post_init__(self):
+        if self.count < 0 or self.speed <= 0 or len(self.height_range) != 2:
+            raise ValueError(f'invalid crowd config {self}')
+
+
+@dataclass
+class DroneConfig:
+    """Drone ring, motion and gimbal PID (the paper's gains; error measured in 1920-px-wide pixels)."""
+
+    count: int = 8
+    ring_half_side: float = 20.5  # home positions on a square ring this far from the scene centre (metres)
+    altitude: float = 12.3
+    reference_ring_half_side: float = 22.7  # static reference poses (reference/ folder), like the real sample
+    reference_altitude: float = 12.29
+    target_xy: float = 3.0  # random targets within +- this of home in x and y
+    target_z_band: float = 1.0  # ... and within this band in z around the altitude
+    v_max: float = 1.5
+    retarget_period: list = field(default_factory=lambda: [1.0, 2.5])  # seconds between new targets
+    position_gain: float = 0.4  # velocity command = gain * (target - position), 1/s
+    max_accel: float = 1.5  # m/s^2, also sets the body tilt (atan(a / g)) that the gimbal must correct
+    tilt_lag_s: float = 0.4  # the body attitude (and so the acceleration) follows the command with this lag
+    kp: float = 0.0002
+    ki: float = 0.00002
+    kd: float = 0.0001
+    aim_jitter: float = 3.0  # the aimed point wanders within +- this of the centre (metres)
+    hfov_deg: float = 70.0
+
+    def __post_init__(self):
+        if not 1 <= self.count <= 8:
+            raise ValueError(f'drone count must be 1..8 (MATRIX views D1..D8), got {self.count}')
+        if not 10.0 <= self.hfov_deg <= 150.0 or self.v_max <= 0 or self.altitude <= 0:
+            raise ValueError(f'invalid drone config {self}')
+
+
+@dataclass
+class SceneConfig:
+    """One scene variant. ``area`` is the walkable square (x_min, y_min, x_max, y_max), internal metres."""
+
+    name: str = 'complex'
+    area: list = field(default_factory=lambda: [0.0, -30.0, 30.0, 0.0])
+    floor: str = 'cement'  # cement | cobblestone
+    floor_color: list = field(default_factory=lambda: [178, 182, 186])  # BGR mean of the walkable floor
+    markings: bool = True  # painted joint lines and the area outline
+    block: BoxConfig = None  # the central occluder; None for no obstruction
+    pillars: list = field(default_factory=list)  # more BoxConfig obstacles (drawn and occluding)
+    boards: list = field(default_factory=list)  # BoardConfig list
+    crowd: CrowdConfig = field(default_factory=CrowdConfig)
+    drones: DroneConfig = field(default_factory=DroneConfig)
+    building_distance: float = 34.0  # facades stand on a square ring this far from the centre
+    building_height: list = field(default_factory=lambda: [14.0, 30.0])
+
+    def __post_init__(self):
+        if self.floor not in ('cement', 'cobblestone'):
+            raise ValueError(f'floor must be cement or cobblestone, got {self.floor!r}')
+        x0, y0, x1, y1 = self.area
+        gx0, gy0, gx1, gy1 = POSITION_GRID_EXTENT
+        if not (gx0 <= x0 < x1 <= gx1 and gy0 <= y0 < y1 <= gy1):
+            raise ValueError(f'area {self.area} must lie inside the MATRIX position grid '
+                             f'{POSITION_GRID_EXTENT}')
+        if self.building_distance <= self.drones.ring_half_side + 2.0:
+            raise ValueError('building_distance must be beyond the drone ring (+2 m)')
+
+    @property
+    def center(self) -> tuple:
+        x0, y0, x1, y1 = self.area
+        return ((x0 + x1) / 2.0, (y0 + y1) / 2.0)
+
+    @property
+    def obstacles(self) -> list:
+        """Every occluding box on the ground (block first)."""
+        return ([self.block] if self.block is not None else []) + list(self.pillars)
+
+
+def _build(cls, data, where: str):
+    if data is None:
+        return None
+    if not isinstance(data, dict):
+        raise ValueError(f'{where}: expected a mapping, got {data!r}')
+    names = {f.name for f in dataclasses.fields(cls)}
+    unknown = set(data) - names
+    if unknown:
+        raise ValueError(f'{where}: unknown keys {sorted(unknown)} (known: {sorted(names)})')
+    return cls(**data)
+
+
+def scene_config_from_dict(data: dict) -> SceneConfig:
+    """Nested dict (as in the YAML files) -> validated :class:`SceneConfig`."""
+    data = dict(data)
+    data['block'] = _build(BoxConfig, data.get('block'), 'block')
+    data['pillars'] = [_build(BoxConfig, p, f'pillars[{i}]') for i, p in enumerate(data.get('pillars') or [])]
+    data['boards'] = [_build(BoardConfig, b, f'boards[{i}]') for i, b in enumerate(data.get('boards') or [])]
+    data['crowd'] = _build(CrowdConfig, data.get('crowd', {}), 'crowd')
+    data['drones'] = _build(DroneConfig, data.get('drones', {}), 'drones')
+    return _build(SceneConfig, data, 'scene')
+
+
+def load_scene_config(name_or_path) -> SceneConfig:
+    """Load a shipped variant by name ('simple', 'complex', 'modified') or a YAML file by path."""
+    path = Path(name_or_path)
+    if str(name_or_path) in VARIANTS:
+        path = CONFIG_DIR / f'{name_or_path}.yaml'
+    if not path.is_file():
+        raise FileNotFoundError(f'scene config {name_or_path!r} is neither a variant {VARIANTS} nor a file')
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ValueError(f'{path}: not valid YAML: {exc}') from exc
+    try:
+        return scene_config_from_dict(data or {})
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f'{path}: {exc}') from exc
+
+
+def scene_config_to_dict(config: SceneConfig) -> dict:
+    """Plain dict of a config (stored in ``matrix_tracker_meta.json`` so a sequence documents its scene)."""
+    return dataclasses.asdict(config)

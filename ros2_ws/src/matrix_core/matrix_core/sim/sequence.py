@@ -1,0 +1,151 @@
+"""Generate a sequence: step crowd and drones, render every view, write MATRIX files (+ optional bag).
+
+Output folder layout: the MATRIX format written by :class:`~matrix_core.datasets.MatrixWriter`
+(``image_subsets``, ``calibrations``, ``annotations_positions``, ``matchings/{Pedestrians,Planes}``,
+``reference/`` = each drone's static reference pose, empty scene), plus simulator-only truth in the internal
+convention:
+``sim_ground_truth/TTTT.json`` (per view: ``img_H_ground``, ``world_T_cam``, camera centre, drone position
+and velocity) and, with ``bag``, ``bag/`` (rosbag2 MCAP, topics in :mod:`matrix_core.bags`).
+
+Checkerboard inner corners are the markers of ``matchings/Planes/3d.txt`` (ids in
+:data:`~matrix_core.sim.scene.BOARD_MARKER_BASE`); each frame's ``CameraN_2d`` lists those inside the image
+and not hidden by a box (people may stand on them).
+"""
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from matrix_core.datasets import MatrixWriter
+from matrix_core.datasets.matrix_conventions import view_name, world_to_position_id
+from matrix_core.datasets.types import PersonAnnotation
+from matrix_core.sim.appearance import person_colors
+from matrix_core.sim.config import load_scene_config, scene_config_to_dict
+from matrix_core.sim.crowd import Crowd, ReplayCrowd
+from matrix_core.sim.drones import DroneFleet
+from matrix_core.sim.ground_truth import annotation_box, view_truth, visible_markers
+from matrix_core.sim.render import People, Renderer
+from matrix_core.sim.scene import Scene
+from matrix_core.sim.visibility import line_of_sight, rays_blocked
+
+
+def ground_m_per_px(width: int) -> float:
+    """Ground texel size for a render width: 2.5 cm at 1920 px, proportionally coarser below."""
+    return 0.025 * max(1.0, 1920.0 / width)
+
+
+class Simulation:
+    """The moving scene of one config and seed, independent of the render size.
+
+    The random streams of scene, crowd, drones and looks are separate children of ``seed``, so e.g.
+    rendering at another resolution or replaying trajectories does not change the drone motion.
+    """
+
+    def __init__(self, config, seed: int, width: int, height: int, replay=None):
+        self.config = config
+        self.width, self.height = width, height
+        scene_rng, crowd_rng, drone_rng, look_rng = (np.random.default_rng(s)
+                                                     for s in np.random.SeedSequence(seed).spawn(4))
+        self.scene = Scene(config, scene_rng, ground_m_per_px(width))
+        self.renderer = Renderer(self.scene)
+        if replay is not None:
+            self.crowd = ReplayCrowd(replay, crowd_rng, config.crowd.height_range)
+        else:
+            self.crowd = Crowd(config, crowd_rng)
+        self.fleet = DroneFleet(config.drones, config.center, drone_rng)
+        self.colors = person_colors(look_rng, len(self.crowd.ids))
+        self.views = [view_name(k + 1) for k in range(config.drones.count)]
+
+    def step(self, seconds: float) -> None:
+        self.crowd.step(seconds)
+        self.fleet.step(seconds)
+
+    def people(self) -> People:
+        c = self.config.crowd
+        return People(self.crowd.ids, self.crowd.positions, self.crowd.heights, self.colors,
+                      c.leg_radius, c.body_radius)
+
+    def positions(self) -> dict:
+        """person id -> (3,) foot point, metres."""
+        return {int(i): np.array([p[0], p[1], 0.0]) for i, p in zip(self.crowd.ids, self.crowd.positions)}
+
+    def camera(self, k: int):
+        return self.fleet.camera(k, self.width, self.height)
+
+    def render_view(self, k: int) -> tuple:
+        """(camera, image, ids, visible (N,) bool) of view index ``k`` now."""
+        cam = self.camera(k)
+        img, ids = self.renderer.render(cam, self.people())
+        visible = line_of_sight(cam, self.crowd.positions, self.scene.occluders)
+        return cam, img, ids, visible
+
+
+def write_frame(sim: Simulation, writer: MatrixWriter, frame: int, out: Path) -> dict:
+    """Render and write one frame; returns {'images': {view: img}, 'cameras': {view: Camera}, 'positions'}."""
+    images, cameras, truth = {}, {}, {}
+    boxes = {int(i): {} for i in sim.crowd.ids}
+    positions = sim.positions()
+    for k, view in enumerate(sim.views):
+        cam, img, _, visible = sim.render_view(k)
+        images[view], cameras[view] = img, cam
+        writer.write_image(view, frame, img)
+        writer.write_camera(view, frame, cam)
+        seen = {}
+        for pid, xy, vis in zip(sim.crowd.ids, sim.crowd.positions, visible):
+            if vis:
+                boxes[int(pid)][view] = annotation_box(cam, xy)
+                seen[int(pid)] = positions[int(pid)]
+        writer.write_line_of_sight(view, frame, seen)
+        ids, uv = visible_markers(cam, sim.scene.marker_ids, sim.scene.marker_xyz, sim.scene.occluders,
+                                  rays_blocked)
+        writer.write_plane_points(view, frame, ids, uv)
+        truth[view] = view_truth(cam, sim.fleet.drones[k])
+    persons = [PersonAnnotation(pid, world_to_position_id(positions[pid][:2]), positions[pid][:2], boxes[pid])
+               for pid in sorted(positions)]
+    writer.write_annotations(frame, persons, sim.views)
+    writer.write_pedestrians(frame, positions)
+    path = out / 'sim_ground_truth' / f'{frame:04d}.json'
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(truth, indent=1, sort_keys=True) + '\n')
+    return {'images': images, 'cameras': cameras, 'positions': positions}
+
+
+def simulate(settings, progress: bool = True) -> Path:
+    """Generate ``settings.frames`` frames into ``settings.out`` (see the module docstring)."""
+    from tqdm import tqdm
+
+    from matrix_core.bags import SequenceBagWriter
+    from matrix_core.datasets import open_dataset
+
+    out = Path(settings.out)
+    if out.exists() and any(out.iterdir()):
+        raise ValueError(f'output folder {out} is not empty')
+    config = load_scene_config(settings.config)
+    replay = open_dataset(settings.replay) if settings.replay else None
+    sim = Simulation(config, settings.seed, settings.width, settings.height, replay)
+    meta = {'simulator': {'config': scene_config_to_dict(config), 'seed': settings.seed,
+                          'frame_period': settings.frame_period, 'replay': settings.replay or None},
+            'image_size': [settings.width, settings.height]}
+    writer = MatrixWriter(out, area=tuple(config.area), image_ext=settings.image_ext, extra_meta=meta)
+    writer.write_plane_markers({int(i): p for i, p in zip(sim.scene.marker_ids, sim.scene.marker_xyz)})
+    for k, view in enumerate(sim.views):
+        cam = sim.fleet.reference_camera(k, settings.width, settings.height)
+        writer.write_image(view, 0, sim.renderer.render(cam, None)[0], reference=True)
+        writer.write_camera(view, 0, cam, reference=True)
+    bag = (SequenceBagWriter(out / 'bag', sim.views, settings.compressed, settings.start_time,
+                             settings.frame_period) if settings.bag else None)
+    if bag is not None:
+        bag.__enter__()
+    try:
+        for frame in tqdm(range(settings.frames), desc=f'simulate {config.name}', unit='frame',
+                          disable=not progress):
+            if frame > 0:
+                sim.step(settings.frame_period)
+            data = write_frame(sim, writer, frame, out)
+            if bag is not None:
+                bag.write_frame(frame, data['images'], data['cameras'], data['positions'])
+    finally:
+        if bag is not None:
+            bag.__exit__(None, None, None)
+    return out

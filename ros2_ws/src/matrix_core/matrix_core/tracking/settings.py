@@ -1,0 +1,30 @@
+"""Settings of the BEV tracker (CLI flags of ``matrix-tracker track`` and ROS parameters of ``fuse``)."""
+
+from dataclasses import dataclass, field
+
+
+@dataclass
+class TrackerSettings:
+    """ByteTrack-style association of ground-plane detections. Distances in metres, times in seconds."""
+
+    gate_m: float = field(default=1.0, metadata={'help': 'largest distance (m) between a track and a detection that may be paired'})
+    gate_growth_m: float = field(default=1.0, metadata={'help': 'the gate of a track coasting through a gap grows by this much (m) per missed frame (people turn while unseen)'})
+    high_score: float = field(default=0.5, metadata={'help': 'detections at or above this score are matched first and may start tracks'})
+    low_score: float = field(default=0.2, metadata={'help': 'detections below this score are ignored; between low and high they only extend confirmed tracks (ByteTrack second stage)'})
+    birth_hits: int = field(default=2, metadata={'help': 'consecutive matched frames before a track gets an id and is reported'})
+    max_misses: int = field(default=3, metadata={'help': 'a confirmed track is deleted after this many frames in a row without a detection'})
+    frame_interval_s: float = field(default=0.5, metadata={'help': 'time between frames (s); MATRIX is 2 fps'})
+    accel_noise: float = field(default=2.0, metadata={'help': 'Kalman process noise: std of the acceleration (m/s^2)'})
+    measurement_noise_m: float = field(default=0.3, metadata={'help': 'Kalman measurement noise: std of a detection position (m)'})
+    use_offsets: bool = field(default=True, metadata={'help': 'associate with the detections\' tracking offsets (CenterTrack) when present'})
+
+    def __post_init__(self):
+        for name in ('gate_m', 'frame_interval_s', 'accel_noise', 'measurement_noise_m'):
+            if not getattr(self, name) > 0:
+                raise ValueError(f'{name} must be positive, got {getattr(self, name)}')
+        if self.gate_growth_m < 0:
+            raise ValueError(f'gate_growth_m must be >= 0, got {self.gate_growth_m}')
+        if not 0 <= self.low_score <= self.high_score:
+            raise ValueError(f'need 0 <= low_score <= high_score, got {self.low_score}, {self.high_score}')
+        if self.birth_hits < 1 or self.max_misses < 0:
+            raise ValueError(f'birth_hits must be >= 1 and max_misses >= 0, got {self.birth_hits}, {self.max_misses}')

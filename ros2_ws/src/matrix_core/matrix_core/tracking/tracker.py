@@ -1,0 +1,89 @@
+"""ByteTrack-style multi-person tracker on the ground plane.
+
+Per frame: predict every track (constant velocity), match confident detections to all tracks, then
+weak detections to the confirmed tracks left over, start tentative tracks from unmatched confident
+detections, give a track an id after ``birth_hits`` matched frames, delete it after ``max_misses``
+frames without a match. Ids are owned by the tracker instance and restart at 1 after ``reset()``.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from matrix_core.tracking.association import associate
+from matrix_core.tracking.kalman import ConstantVelocityKalman
+from matrix_core.tracking.settings import TrackerSettings
+from matrix_core.tracking.track import BevDetections, Track
+
+
+@dataclass(frozen=True)
+class TrackOutput:
+    """A confirmed track matched in the current frame: id, (2,) filtered position (m), (2,) velocity (m/s)."""
+
+    track_id: int
+    xy: np.ndarray
+    velocity: np.ndarray
+    score: float
+
+
+class BevTracker:
+    """Turns per-frame :class:`BevDetections` into identities. One instance per sequence (or ``reset()``)."""
+
+    def __init__(self, settings: TrackerSettings = None):
+        self.settings = settings or TrackerSettings()
+        s = self.settings
+        self.kf = ConstantVelocityKalman(s.frame_interval_s, s.accel_noise, s.measurement_noise_m)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget all tracks; the next confirmed track gets id 1."""
+        self.tracks = []
+        self._next_id = 1
+
+    def update(self, dets: BevDetections) -> list:
+        """Advance one frame. Returns the :class:`TrackOutput` of confirmed tracks matched in this frame."""
+        s = self.settings
+        for tr in self.tracks:
+            tr.mean, tr.cov = self.kf.predict(tr.mean, tr.cov)
+        high = np.flatnonzero(dets.scores >= s.high_score)
+        low = np.flatnonzero((dets.scores >= s.low_score) & (dets.scores < s.high_score))
+        # Stage 1: confident detections with every track (confirmed ones listed first break ties).
+        order = sorted(range(len(self.tracks)), key=lambda k: not self.tracks[k].confirmed)
+        pool = [self.tracks[k] for k in order]
+        pairs, left_t, left_d = associate(pool, dets, high, s.use_offsets, s.gate_m, s.gate_growth_m)
+        matched = [(pool[i], j) for i, j in pairs]
+        # Stage 2: weak detections only extend confirmed tracks (ByteTrack's recovery of occluded people).
+        rest = [pool[i] for i in left_t if pool[i].confirmed]
+        pairs2, _, _ = associate(rest, dets, low, s.use_offsets, s.gate_m, s.gate_growth_m)
+        matched += [(rest[i], j) for i, j in pairs2]
+
+        hit = set()
+        for tr, j in matched:
+            tr.mean, tr.cov = self.kf.update(tr.mean, tr.cov, dets.xy[j])
+            tr.last_xy = tr.mean[:2].copy()
+            tr.score = float(dets.scores[j])
+            tr.hits += 1
+            tr.misses = 0
+            if not tr.confirmed and tr.hits >= s.birth_hits:
+                tr.track_id, self._next_id = self._next_id, self._next_id + 1
+            hit.add(id(tr))
+        survivors = []
+        for tr in self.tracks:
+            if id(tr) not in hit:
+                tr.misses += 1
+                tr.hits = 0
+                if not tr.confirmed or tr.misses > s.max_misses:
+                    continue        # tentative tracks die at their first miss
+            survivors.append(tr)
+        for j in left_d:
+            velocity = None
+            if s.use_offsets and dets.offsets is not None:
+                velocity = -dets.offsets[j] / s.frame_interval_s
+            tr = Track(*self.kf.initiate(dets.xy[j], velocity), float(dets.scores[j]))
+            if s.birth_hits <= 1:
+                tr.track_id, self._next_id = self._next_id, self._next_id + 1
+                hit.add(id(tr))
+            survivors.append(tr)
+        self.tracks = survivors
+        return [TrackOutput(tr.track_id, tr.xy.copy(), tr.velocity.copy(), tr.score)
+                for tr in self.tracks if tr.confirmed and id(tr) in hit]
