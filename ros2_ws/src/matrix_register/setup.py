@@ -21,5 +21,5 @@ setup(
     description="Registration of each drone's image to its reference view (local features, RANSAC homography): publishes homographies.",
     license='Apache-2.0',
     # Node executables are added here by the issue that implements each node.
-    entry_points={'console_scripts': []},
+    entry_points={'console_scripts': ['register = matrix_register.register_node:main']},
 )

@@ -9,7 +9,7 @@ import sys
 
 from matrix_core.datasets.types import DatasetError
 
-SUBCOMMANDS = ('info',)
+SUBCOMMANDS = ('info', 'bag', 'track', 'score', 'register', 'train', 'evaluate', 'calibrate', 'simulate')
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -27,7 +27,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except (DatasetError, FileNotFoundError, ValueError) as exc:
+    except (DatasetError, FileNotFoundError, FileExistsError, ValueError) as exc:
         print(f'matrix-tracker {args.command}: error: {exc}', file=sys.stderr)
         return 2
 

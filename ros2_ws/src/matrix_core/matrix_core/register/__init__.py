@@ -1,0 +1,13 @@
+"""Feature-based registration of each drone's current image to its reference image (issue 5).
+
+Pipeline (one idea per module): ``backends`` (registry of feature backends: ``backend_sift``,
+``backend_kornia``) -> ``matching`` (symmetric ratio test) -> ``fit`` (RANSAC/MAGSAC homography) ->
+``gate`` (physical sanity checks) -> ``result``; ``reference`` caches the reference's ground features
+(``ground_mask``) and key frames; ``registrar`` ties it together per drone; ``evaluate`` computes the
+acceptance error from the stored calibrations.
+"""
+
+from matrix_core.register.result import RegistrationResult
+from matrix_core.register.settings import RegisterSettings
+
+__all__ = ['RegisterSettings', 'RegistrationResult']

@@ -1,0 +1,123 @@
+"""Registration of one drone's frames to its reference: features -> symmetric matches -> robust homography
+-> sanity gate -> result; with re-keying to a recent good frame when confidence stays low."""
+
+import time
+from dataclasses import replace
+
+import cv2
+import numpy as np
+
+from matrix_core.geometry.camera import Camera
+from matrix_core.register.backends import make_backend
+from matrix_core.register.features import Features
+from matrix_core.register.fit import fit_homography
+from matrix_core.register.gate import check_registration
+from matrix_core.register.matching import match_symmetric
+from matrix_core.register.reference import Reference
+from matrix_core.register.result import STATUS_FAILED, STATUS_OK, RegistrationResult
+from matrix_core.register.settings import RegisterSettings
+
+
+class Registrar:
+    """Registers the frames of ONE drone (call :meth:`register` in frame order).
+
+    Args:
+        settings: :class:`RegisterSettings`.
+        reference_image: (H, W, 3) BGR reference image (or the first good frame).
+        reference_camera: its calibration (internal convention).
+        area: (x_min, y_min, x_max, y_max) of the scene ground, internal world metres.
+        reference_id: name used in results, e.g. 'D1/reference'.
+        backend: a feature backend to share between drones (default: built from ``settings``).
+    """
+
+    def __init__(self, settings: RegisterSettings, reference_image: np.ndarray, reference_camera: Camera,
+                 area, reference_id: str = 'reference', backend=None):
+        self.settings = s = settings
+        self.backend = backend if backend is not None else make_backend(s)
+        h, w = reference_image.shape[:2]
+        if (w, h) != (reference_camera.width, reference_camera.height):
+            raise ValueError(f'{reference_id}: image is {w}x{h} but its calibration is '
+                             f'{reference_camera.width}x{reference_camera.height}')
+        features = self.backend.extract(reference_image, s.reference_max_features)
+        self.reference = Reference(reference_id, reference_camera, features, area, s.ground_only,
+                                   s.ground_margin_m, s.exclude_boxes)
+        self.key = None
+        self._previous_center = None
+        self._frames_since_good = 1
+        self._weak_streak = 0
+        self._last_good = None  # (frame_id, features, H_cur_to_ref)
+
+    @property
+    def reference_id(self) -> str:
+        base = self.reference.reference_id
+        return base if self.key is None else f'{base}<-{self.key.key_id}'
+
+    def _target(self):
+        """(features to match against, (3, 3) target pixels -> reference pixels)."""
+        if self.key is None:
+            return self.reference.features, np.eye(3)
+        return self.key.features, self.key.key_to_ref
+
+    def register(self, image: np.ndarray, frame_id='') -> RegistrationResult:
+        """Register one (H, W, 3) BGR current image; see :class:`RegistrationResult` for the output."""
+        s = self.settings
+        start = time.perf_counter()
+        cam = self.reference.camera
+        h, w = image.shape[:2]
+        if (w, h) != (cam.width, cam.height):
+            return self._result(STATUS_FAILED, None, 0, 0, float('nan'), start,
+                                f'image is {w}x{h}, the reference is {cam.width}x{cam.height}')
+        cur = self.backend.extract(image, s.max_features)
+        target, target_to_ref = self._target()
+        pairs = match_symmetric(cur.desc, target.desc, s.ratio, s.matcher)
+        cv2.setRNGSeed(s.seed)
+        # Fit in reference pixels, so that the inlier threshold is in full-resolution reference pixels.
+        dst = cv2.perspectiveTransform(target.xy[pairs[:, 1]].reshape(-1, 1, 2), target_to_ref).reshape(-1, 2) \
+            if len(pairs) else np.zeros((0, 2))
+        fit = fit_homography(cur.xy[pairs[:, 0]], dst, s.estimator, s.ransac_threshold_px, s.ransac_iterations)
+        matches, inliers = len(pairs), int(fit.inliers.sum())
+        if fit.H is None:
+            result = self._result(STATUS_FAILED, None, matches, 0, float('nan'), start, fit.reason)
+        elif inliers < s.min_inliers:
+            result = self._result(STATUS_FAILED, None, matches, inliers, fit.error_px, start,
+                                  f'only {inliers} inliers (min_inliers {s.min_inliers})')
+        else:
+            reason, implied = check_registration(
+                fit.H, cam.K, cam.img_H_ground(), cam.center, self.reference.polygon, self._previous_center,
+                self._frames_since_good, s.gate_max_shape_error, s.gate_max_area_ratio,
+                s.gate_max_height_change_m, s.gate_max_step_m)
+            if reason:
+                result = self._result(STATUS_FAILED, None, matches, inliers, fit.error_px, start, reason)
+            else:
+                result = self._result(STATUS_OK, fit.H, matches, inliers, fit.error_px, start)
+                self._previous_center = implied.center
+        note = self._update_key(result, frame_id, cur)
+        if note:
+            result = replace(result, message=f'{result.message}; {note}' if result.message else note)
+        return result
+
+    def _result(self, status, H, matches, inliers, error_px, start, message='') -> RegistrationResult:
+        H_ground = None
+        if H is not None:
+            H_ground = self.reference.camera.ground_H_img() @ H
+            H_ground = H_ground / H_ground[2, 2]
+        return RegistrationResult(status, H, H_ground, inliers / matches if matches else 0.0, matches, inliers,
+                                  error_px, self.reference_id, self.backend.name,
+                                  time.perf_counter() - start, message)
+
+    def _update_key(self, result: RegistrationResult, frame_id, cur: Features) -> str:
+        """Track good frames; after ``rekey_after`` weak frames in a row, chain through the last good one."""
+        s = self.settings
+        self._frames_since_good = 1 if result.ok else self._frames_since_good + 1
+        if result.ok and result.confidence >= s.good_confidence:
+            self._last_good = (frame_id, cur, result.H_cur_to_ref)
+        weak = not result.ok or result.confidence < s.rekey_confidence
+        self._weak_streak = self._weak_streak + 1 if weak else 0
+        if s.rekey_after and self._weak_streak >= s.rekey_after and self._last_good is not None:
+            frame, features, H = self._last_good
+            key_id = f'key:{frame}'
+            if self.key is None or self.key.key_id != key_id:
+                self.key = self.reference.make_key(key_id, features, H)
+                self._weak_streak = 0
+                return f're-keyed: next frames register to frame {frame}, chained to the reference'
+        return ''

@@ -1,0 +1,74 @@
+"""Settings of the registration component (CLI flags of ``matrix-tracker register`` and ROS parameters
+of the ``register`` node, same names and defaults)."""
+
+from dataclasses import dataclass, field
+
+# The real MATRIX scene's central block, internal world metres: x0, y0, x1, y1 (footprint), height.
+MATRIX_BLOCK = [12.5, -17.5, 17.5, -12.5, 30.0]
+
+
+@dataclass
+class RegisterSettings:
+    backend: str = field(default='sift', metadata={
+        'help': 'feature backend: sift, gftt_affnet_hardnet, gftt_affnet_hardtfeat, gftt_affnet_sift '
+                '(see matrix_core.register.backends.BACKENDS)'})
+    scale: float = field(default=0.25, metadata={
+        'help': 'images are resized by this factor before feature extraction (0.25 = 480x270 for 1920x1080)'})
+    max_features: int = field(default=4000, metadata={
+        'help': 'features kept per current image (strongest first); the reference keeps reference_max_features'})
+    reference_max_features: int = field(default=16000, metadata={
+        'help': 'features detected on the reference image before the ground mask (extracted once, cached)'})
+    contrast_threshold: float = field(default=0.005, metadata={
+        'help': 'SIFT contrastThreshold; the OpenCV default 0.04 finds almost nothing on the plaza concrete'})
+    ratio: float = field(default=0.8, metadata={'help': "Lowe's ratio test threshold tau (both directions)"})
+    matcher: str = field(default='flann', metadata={'help': 'nearest-neighbour search: flann or brute'})
+    estimator: str = field(default='magsac', metadata={'help': 'robust homography estimator: ransac or magsac'})
+    ransac_threshold_px: float = field(default=3.0, metadata={
+        'help': 'inlier threshold in FULL-resolution pixels of the reference image'})
+    ransac_iterations: int = field(default=5000, metadata={'help': 'maximum robust-estimator iterations'})
+    min_inliers: int = field(default=15, metadata={'help': 'fewer inliers than this -> status failed'})
+    ground_only: bool = field(default=True, metadata={
+        'help': 'keep only reference features whose back-projection lies on the scene ground'})
+    ground_margin_m: float = field(default=0.0, metadata={
+        'help': 'grow the ground area (from the dataset) by this many metres on every side for the mask'})
+    exclude_boxes: list[float] = field(default_factory=lambda: list(MATRIX_BLOCK), metadata={
+        'help': 'obstacles to mask out, groups of 5 numbers: x0 y0 x1 y1 height (internal world metres); '
+                'default: the MATRIX central block'})
+    gate_max_shape_error: float = field(default=0.02, metadata={
+        'help': 'sanity gate: largest deviation of the implied ground homography from a rigid camera '
+                '(column norm ratio and non-orthogonality of K^-1 H)'})
+    gate_max_area_ratio: float = field(default=4.0, metadata={
+        'help': 'sanity gate: the ground area warped into the current image may shrink/grow by at most this '
+                'factor against the reference'})
+    gate_max_height_change_m: float = field(default=4.0, metadata={
+        'help': 'sanity gate: largest change of the implied camera height against the reference'})
+    gate_max_step_m: float = field(default=3.0, metadata={
+        'help': 'sanity gate: largest jump of the implied camera centre between consecutive registered frames'})
+    rekey_confidence: float = field(default=0.1, metadata={
+        'help': 'confidence below which a frame counts as weak for re-keying'})
+    rekey_after: int = field(default=3, metadata={
+        'help': 're-key to the last well-registered frame after this many weak or failed frames in a row (0 = never)'})
+    good_confidence: float = field(default=0.25, metadata={
+        'help': 'a frame with at least this confidence (and passing the gate) may become a key frame'})
+    seed: int = field(default=0, metadata={'help': 'random seed of the robust estimator (reproducible results)'})
+
+    def __post_init__(self):
+        from matrix_core.register.backends import BACKENDS
+
+        if self.backend not in BACKENDS:
+            raise ValueError(f'unknown backend {self.backend!r}; choose one of {sorted(BACKENDS)}')
+        if not 0.05 <= self.scale <= 1.0:
+            raise ValueError(f'scale must be in [0.05, 1], got {self.scale}')
+        if not 0.0 < self.ratio <= 1.0:
+            raise ValueError(f'ratio must be in (0, 1], got {self.ratio}')
+        if self.matcher not in ('flann', 'brute'):
+            raise ValueError(f'matcher must be flann or brute, got {self.matcher!r}')
+        if self.estimator not in ('ransac', 'magsac'):
+            raise ValueError(f'estimator must be ransac or magsac, got {self.estimator!r}')
+        if len(self.exclude_boxes) % 5:
+            raise ValueError(f'exclude_boxes needs groups of 5 numbers, got {len(self.exclude_boxes)}')
+        for name in ('max_features', 'reference_max_features', 'min_inliers', 'ransac_iterations'):
+            if getattr(self, name) < 4:
+                raise ValueError(f'{name} must be at least 4')
+        if self.ransac_threshold_px <= 0 or self.gate_max_area_ratio <= 1.0:
+            raise ValueError('ransac_threshold_px must be > 0 and gate_max_area_ratio > 1')

@@ -1,0 +1,117 @@
+"""The real ``register`` node in its own process registers real MATRIX images received over DDS.
+
+Two more processes take part: the installed ``dataset_player`` publishes frames 0000-0002 of two drones
+(a corner and a side drone, so the node handles several drones), and this test process listens to the
+homographies, checks them against the ground truth from the stored calibrations, then sends a corrupt
+image and checks that the node reports it and keeps running.
+"""
+
+import subprocess
+import time
+
+import numpy as np
+import pytest
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from matrix_msgs.msg import HomographyStamped
+from rclpy.node import Node
+from sensor_msgs.msg import Image
+
+from matrix_core.datasets import MatrixDataset
+from matrix_core.geometry.homography import apply_homography
+from matrix_core.register.evaluate import homography_error_px
+from matrix_core.register.ground_mask import visible_ground_grid
+from matrix_core.register.settings import MATRIX_BLOCK
+from matrix_ros.conversions import stamp_to_seconds
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+VIEWS = ('D3', 'D6')
+FRAMES = 3
+
+
+def _spin_until(node, until, processes, timeout_s):
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline and not until() and all(p.poll() is None for p in processes):
+        rclpy.spin_once(node, timeout_sec=0.1)
+
+
+def _stop(process) -> str:
+    process.terminate()
+    try:
+        out, _ = process.communicate(timeout=20)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        out, _ = process.communicate()
+    return out
+
+
+def test_register_node_over_dds(matrix_sample, node_executable):
+    dataset = MatrixDataset(matrix_sample)
+    views = '[' + ','.join(VIEWS) + ']'
+    register = subprocess.Popen(
+        [str(node_executable('matrix_register', 'register')), '--ros-args', '-p', f'views:={views}',
+         '-p', f'reference_dataset:={matrix_sample}'],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    rclpy.init()
+    got = {v: [] for v in VIEWS}
+    diags = []
+    node = Node('register_test_listener')
+    player = None
+    try:
+        for v in VIEWS:
+            node.create_subscription(HomographyStamped, f'/{v}/homography', lambda m, v=v: got[v].append(m), 10)
+        node.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 10)
+        # Start the images only once the register node is up and this listener is connected to it.
+        _spin_until(node, lambda: all(node.count_publishers(f'/{v}/homography') for v in VIEWS), [register], 60.0)
+        player = subprocess.Popen(
+            [str(node_executable('matrix_ros', 'dataset_player')), '--ros-args', '-p', f'dataset:={matrix_sample}',
+             '-p', f'views:={views}', '-p', f'max_frames:={FRAMES}', '-p', 'rate:=2.0',
+             '-p', 'wait_for_subscribers:=1'],
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        _spin_until(node, lambda: all(len(m) >= FRAMES for m in got.values()), [register, player], 120.0)
+
+        # Bad input: an image whose data is too short. The node must say so and keep running.
+        bad_pub = node.create_publisher(Image, f'/{VIEWS[0]}/image_raw', 10)
+        bad = Image(height=1080, width=1920, encoding='bgr8', step=5760)
+        bad.data = bytes(100)
+        bad.header.stamp.sec = 99
+
+        def bad_reported():
+            return any(s.level == DiagnosticStatus.ERROR and 'bad input' in s.message
+                       for d in diags for s in d.status)
+
+        deadline = time.monotonic() + 30.0
+        while time.monotonic() < deadline and not bad_reported() and register.poll() is None:
+            bad_pub.publish(bad)
+            _spin_until(node, bad_reported, [register], 1.0)
+        alive = register.poll() is None
+    finally:
+        node.destroy_node()
+        rclpy.shutdown()
+        player_out = _stop(player) if player is not None else '(not started)'
+        register_out = _stop(register)
+    log = f'register said:\n{register_out}\nplayer said:\n{player_out}'
+    assert alive, f'register node died on a corrupt image; {log}'
+    assert bad_reported(), f'no diagnostics error for the corrupt image; {log}'
+    assert 'too short' in register_out, log
+
+    for view in VIEWS:
+        msgs = got[view]
+        assert len(msgs) >= FRAMES, f'{view}: {len(msgs)} homographies; {log}'
+        ref = dataset.reference_camera(view)
+        for msg in msgs[:FRAMES]:
+            index = round((stamp_to_seconds(msg.header.stamp) - 1.0) / 0.5)
+            frame = dataset.frames[index]
+            cur = dataset.camera(view, frame)
+            assert msg.status == 'ok', f'{view} frame {frame}: {msg.status}'
+            assert msg.backend == 'sift' and msg.reference_id == f'{view}/reference'
+            assert msg.inliers >= 15 and 0.0 < msg.confidence <= 1.0
+            assert msg.confidence == pytest.approx(msg.inliers / msg.matches)
+            H = np.array(msg.h_cur_to_ref).reshape(3, 3)
+            error = homography_error_px(H, cur, ref, dataset.area, MATRIX_BLOCK)
+            assert error < 1.5, f'{view} frame {frame}: {error:.2f} px from the ground truth'
+            # The image-to-ground homography lands image points on their true world position.
+            world = visible_ground_grid(cur, dataset.area, 1.0, MATRIX_BLOCK)
+            est = apply_homography(np.array(msg.h_img_to_ground).reshape(3, 3), cur.ground_to_img(world))
+            assert np.median(np.linalg.norm(est - world, axis=1)) < 0.1  # metres

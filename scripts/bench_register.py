@@ -1,0 +1,116 @@
+#!/usr/bin/env python3
+"""Benchmark of matrix_register: per backend and resolution, time per frame (one CPU thread), matches,
+inliers, confidence and the ground-plane homography error against the stored calibrations.
+
+Pairs: every drone's ``reference/`` image vs frames of the real MATRIX sample (default all 8 x 5 = 40 for
+SIFT; kornia backends take seconds per image, so they get ``--kornia-pairs`` pairs spread over the drones).
+Time per frame = feature extraction of the current image + matching + robust fit + gate (the reference's
+features are extracted once and cached, as in the node). Error: mean over visible ground points, full-res px.
+
+    python scripts/bench_register.py                      # all backends at 1920x1080, 960x540, 480x270
+    python scripts/bench_register.py --backends sift --scales 0.25 0.5
+"""
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+from tqdm import tqdm
+
+from matrix_core.datasets import MatrixDataset
+from matrix_core.register.backends import BACKENDS
+from matrix_core.register.evaluate import homography_error_px
+from matrix_core.register.registrar import Registrar
+from matrix_core.register.settings import RegisterSettings
+from matrix_core.register.weights import MissingWeightsError
+
+
+def feature_budget(backend: str, scale: float, kornia_features: int) -> tuple:
+    """(max_features, reference_max_features): the defaults at 480x270; larger images get more features
+    (with 4000 at 960x540 or more, the strongest features are the facades' and the ground is lost)."""
+    if backend != 'sift':
+        return kornia_features, kornia_features
+    defaults = RegisterSettings()
+    if scale <= 0.25:
+        return defaults.max_features, defaults.reference_max_features
+    return 16000, 32000
+
+
+def bench(dataset, backend, scale, pairs, kornia_features) -> dict:
+    current, reference = feature_budget(backend, scale, kornia_features)
+    settings = RegisterSettings(backend=backend, scale=scale, max_features=current,
+                                reference_max_features=reference)
+    rows, registrars = [], {}
+    for view, frame in tqdm(pairs, desc=f'{backend} @ {scale:g}', unit='pair', leave=False):
+        if view not in registrars:
+            ref_image = cv2.imread(str(dataset.reference_image_path(view)))
+            registrars[view] = Registrar(settings, ref_image, dataset.reference_camera(view), dataset.area,
+                                         f'{view}/reference')
+        r = registrars[view].register(dataset.load_image(view, frame), frame)
+        err = (homography_error_px(r.H_cur_to_ref, dataset.camera(view, frame), dataset.reference_camera(view),
+                                   dataset.area, settings.exclude_boxes) if r.ok else float('nan'))
+        rows.append((r.seconds, r.matches, r.inliers, r.confidence, err, r.ok))
+    a = np.array(rows, dtype=float)
+    ok = a[:, 5] > 0
+    return {'backend': backend, 'size': f'{round(1920 * scale)}x{round(1080 * scale)}', 'pairs': len(rows),
+            'features': current,
+            'failed': int((~ok).sum()), 'ms_median': 1000 * float(np.median(a[:, 0])),
+            'ms_max': 1000 * float(np.max(a[:, 0])), 'matches': float(np.median(a[:, 1])),
+            'inliers': float(np.median(a[:, 2])), 'confidence': float(np.median(a[:, 3])),
+            'err_median_px': float(np.median(a[ok, 4])) if ok.any() else float('nan'),
+            'err_max_px': float(np.max(a[ok, 4])) if ok.any() else float('nan')}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    root = Path(__file__).resolve().parent.parent
+    default_sample = Path(os.environ.get('MATRIX_SHARED', root.parent / 'shared')) / 'matrix_sample'
+    parser.add_argument('--dataset', default=str(default_sample), help='MATRIX folder with reference/')
+    parser.add_argument('--backends', nargs='*', default=sorted(BACKENDS), help='backends to run')
+    parser.add_argument('--scales', nargs='*', type=float, default=[1.0, 0.5, 0.25],
+                        help='image scales (1.0 = 1920x1080)')
+    parser.add_argument('--kornia-pairs', type=int, default=2, help='pairs per kornia backend and scale')
+    parser.add_argument('--kornia-features', type=int, default=8000, help='features of the kornia detectors')
+    parser.add_argument('--json', help='also write the table to this JSON file')
+    args = parser.parse_args(argv)
+
+    cv2.setNumThreads(1)
+    try:
+        import torch
+        torch.set_num_threads(1)
+    except ImportError:
+        pass
+    dataset = MatrixDataset(args.dataset)
+    all_pairs = [(v, f) for v in dataset.views for f in dataset.frames]
+    table = []
+    for backend in args.backends:
+        pairs = all_pairs
+        if backend != 'sift':
+            step = max(1, len(all_pairs) // max(1, args.kornia_pairs))
+            pairs = [all_pairs[(i * step + 2 * i) % len(all_pairs)] for i in range(args.kornia_pairs)]
+        for scale in args.scales:
+            try:
+                table.append(bench(dataset, backend, scale, pairs, args.kornia_features))
+            except MissingWeightsError as exc:
+                print(f'{backend}: skipped: {exc}', file=sys.stderr)
+                break
+            row = table[-1]
+            print(f"{row['backend']:22s} {row['size']:>9s} feat {row['features']:5d} pairs {row['pairs']:2d} failed {row['failed']:2d}  "
+                  f"time {row['ms_median']:7.0f} ms (max {row['ms_max']:6.0f})  matches {row['matches']:5.0f}  "
+                  f"inliers {row['inliers']:5.0f}  c {row['confidence']:.2f}  error median {row['err_median_px']:.2f} px "
+                  f"max {row['err_max_px']:.2f} px", flush=True)
+    if args.json:
+        Path(args.json).write_text(json.dumps(table, indent=1))
+    return 0
+
+
+if __name__ == '__main__':
+    t0 = time.perf_counter()
+    code = main()
+    print(f'bench_register: {time.perf_counter() - t0:.0f} s', file=sys.stderr)
+    sys.exit(code)
