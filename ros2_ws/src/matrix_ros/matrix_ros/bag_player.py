@@ -122,7 +122,7 @@ class BagPlayer(Node):
                         f'{s.lockstep_topic} for t={stamp:.3f} s after {s.lockstep_timeout} s; going on')
             previous_ns = time_ns
         # Reliable subscribers must get the last frame before the process exits.
-        for pub in self.pubs.values():
+        for pub in [*self.pubs.values(), self.clock_pub]:
             pub.wait_for_all_acked(Duration(seconds=5.0))
         self.get_logger().info(f'played {count} frames'
                                + (f' up to t={previous_ns * 1e-9:.3f} s' if previous_ns else ''))
