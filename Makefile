@@ -3,7 +3,7 @@ SHELL := /bin/bash
 .DEFAULT_GOAL := help
 IN_ENV := source scripts/env.sh &&
 
-.PHONY: help setup build test demo bench clean
+.PHONY: help setup build test demo bench clean experiments experiments-quick
 
 help:
 	@echo "make setup  - create .venv (pinned), colcon build ros2_ws, install offline weights (idempotent)"
@@ -11,6 +11,8 @@ help:
 	@echo "make demo   - replay the real MATRIX sample through ROS 2 and write pictures to out/demo"
 	@echo "make bench  - print the speed figures of every component (scripts/bench_*.py)"
 	@echo "make build  - colcon build only"
+	@echo "make experiments       - the paper's experiments at full size (hours) -> docs/RESULTS.md + PNGs"
+	@echo "make experiments-quick - the same as a smoke test (a few minutes; numbers meaningless)"
 
 setup:
 	bash scripts/setup.sh
@@ -26,6 +28,12 @@ demo: setup
 
 bench: setup
 	$(IN_ENV) for b in scripts/bench_*.py; do echo "== $$b"; python "$$b" || exit 1; done
+
+experiments: setup
+	$(IN_ENV) matrix-tracker experiments --mode full --out out/experiments --report docs/RESULTS.md
+
+experiments-quick: setup
+	$(IN_ENV) matrix-tracker experiments --mode quick --out out/experiments --report docs/RESULTS.md
 
 clean:
 	rm -rf ros2_ws/build ros2_ws/install ros2_ws/log out .pytest_cache

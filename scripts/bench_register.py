@@ -9,6 +9,13 @@ features are extracted once and cached, as in the node). Error: mean over visibl
 
     python scripts/bench_register.py                      # all backends at 1920x1080, 960x540, 480x270
     python scripts/bench_register.py --backends sift --scales 0.25 0.5
+    python scripts/bench_register.py --simulated          # full-size simulated acceptance (see below)
+
+``--simulated``: the acceptance on simulated sequences with the default settings: each variant (simple,
+complex, modified) rendered at 1920x1080, 50 frames, seed 3 (kept in ``--sim-dir`` and reused), all 8 drones
+x 50 frames registered to their reference/; prints pairs, failures, time and error median / max (criteria:
+every pair registered, median <= 0.5 px, worst <= 3 px). About 25 s of rendering and 40 s of registration
+per variant on one core. tests/register/test_sim_acceptance.py is its CI-sized version.
 """
 
 import argparse
@@ -23,6 +30,7 @@ import numpy as np
 from tqdm import tqdm
 
 from matrix_core.datasets import MatrixDataset
+from matrix_core.register.acceptance import acceptance_run
 from matrix_core.register.backends import BACKENDS
 from matrix_core.register.evaluate import homography_error_px
 from matrix_core.register.registrar import Registrar
@@ -66,6 +74,30 @@ def bench(dataset, backend, scale, pairs, kornia_features) -> dict:
             'err_max_px': float(np.max(a[ok, 4])) if ok.any() else float('nan')}
 
 
+def simulated_acceptance(args) -> int:
+    """Full-size simulated acceptance; returns 1 if a criterion is missed."""
+    from matrix_core.sim.sequence import simulate
+    from matrix_core.sim.settings import SimulateSettings
+
+    missed = 0
+    for variant in args.variants:
+        folder = Path(args.sim_dir) / f'{variant}_seed{args.sim_seed}_{args.sim_frames}x{args.sim_size[0]}'
+        if not (folder / 'matrix_tracker_meta.json').is_file():
+            simulate(SimulateSettings(config=variant, frames=args.sim_frames, seed=args.sim_seed, out=str(folder),
+                                      width=args.sim_size[0], height=args.sim_size[1]))
+        run = acceptance_run(MatrixDataset(folder), progress=True)
+        ok = run['pairs'] - len(run['failed'])
+        met = not run['failed'] and run['error_px_median'] <= 0.5 and run['error_px_max'] <= 3.0
+        missed += not met
+        print(f"{variant:9s} {run['width']}px  registered {ok}/{run['pairs']}  "
+              f"time {1000 * run['seconds_median']:4.0f} ms  error median {run['error_px_median']:.2f} px "
+              f"max {run['error_px_max']:.2f} px (full-res-equivalent)  "
+              f"{'meets' if met else 'MISSES'} the criteria", flush=True)
+        for pair, reason in run['failed'].items():
+            print(f'  failed {pair}: {reason}')
+    return int(missed > 0)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     root = Path(__file__).resolve().parent.parent
@@ -77,6 +109,12 @@ def main(argv=None) -> int:
     parser.add_argument('--kornia-pairs', type=int, default=2, help='pairs per kornia backend and scale')
     parser.add_argument('--kornia-features', type=int, default=8000, help='features of the kornia detectors')
     parser.add_argument('--json', help='also write the table to this JSON file')
+    parser.add_argument('--simulated', action='store_true', help='run the simulated acceptance instead')
+    parser.add_argument('--variants', nargs='*', default=['simple', 'complex', 'modified'])
+    parser.add_argument('--sim-dir', default='/tmp/matrix_register_sim', help='where the sequences are kept')
+    parser.add_argument('--sim-frames', type=int, default=50)
+    parser.add_argument('--sim-seed', type=int, default=3)
+    parser.add_argument('--sim-size', type=int, nargs=2, default=[1920, 1080], metavar=('W', 'H'))
     args = parser.parse_args(argv)
 
     cv2.setNumThreads(1)
@@ -85,6 +123,8 @@ def main(argv=None) -> int:
         torch.set_num_threads(1)
     except ImportError:
         pass
+    if args.simulated:
+        return simulated_acceptance(args)
     dataset = MatrixDataset(args.dataset)
     all_pairs = [(v, f) for v in dataset.views for f in dataset.frames]
     table = []

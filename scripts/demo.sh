@@ -52,6 +52,7 @@ sleep 5
 start matrix_ros bag_player player.log --ros-args -p "bag:=$BAG" -p wait_for_subscribers:=3 \
   -p lockstep:=true -p lockstep_topic:=/graph_monitor/frame_done -p lockstep_type:=std_msgs/msg/Header
 wait "$monitor"
+cleanup   # this graph is done; the next one starts its own nodes
 echo "logs: $OUT/{calib,register,player,monitor}.log"
 
 echo "== simulator: a seeded complex-variant sequence (10 frames x 8 drones, 640x360) with its bag"
@@ -59,7 +60,28 @@ rm -rf "$OUT/sim"
 matrix-tracker simulate --config complex --frames 10 --seed 7 --fast --image_ext .jpg --bag --out "$OUT/sim"
 matrix-tracker info "$OUT/sim" | grep -E "^(format|views|frames|people|camera_height_m)"
 
-echo "== BEV detection + tracking with the shipped checkpoint on that sequence (offline; the live fuse node is not built yet)"
-CKPT=$(python -c 'import matrix_core.bev, pathlib; print(pathlib.Path(matrix_core.bev.__file__).parent / "checkpoints/complex_quick.pt")')
+CKPT=$(python -c 'from matrix_core.fusion.settings import shipped_checkpoint; print(shipped_checkpoint())')
+echo "== live graph on it: bag_player -> fuse (BEV network + tracker, the bag's per-frame CameraInfo) -> recorder, lockstep on /tracks"
+rm -rf "$OUT/live"; mkdir -p "$OUT/live"
+pids=()
+start matrix_bev_tracker fuse live/fuse.log --ros-args -p input_kind:=camera_info -p use_sim_time:=true \
+  -p 'camera_info_topic:=/{view}/ground_truth/camera_info' \
+  -p sync_timeout:=30.0 -p "checkpoint:=$CKPT"
+start matrix_ros recorder live/recorder.log --ros-args -p "out:=$OUT/live/recording" -p use_sim_time:=true \
+  -p 'topics:=[/tracks,/detections,/bev_heatmap]' \
+  -p 'types:=[matrix_msgs/msg/TrackArray,matrix_msgs/msg/TrackArray,nav_msgs/msg/OccupancyGrid]' \
+  -p tracks_topic:=/tracks -p "mot_file:=$OUT/live/tracks.txt"
+sleep 8   # DDS discovery: fuse -> recorder must be matched before frame 0 leaves the bag
+"$INSTALL/matrix_ros/lib/matrix_ros/bag_player" --ros-args -p "bag:=$OUT/sim/bag" -p wait_for_subscribers:=1 \
+  -p 'topics:=[/D1/image_raw,/D2/image_raw,/D3/image_raw,/D4/image_raw,/D5/image_raw,/D6/image_raw,/D7/image_raw,/D8/image_raw,/D1/ground_truth/camera_info,/D2/ground_truth/camera_info,/D3/ground_truth/camera_info,/D4/ground_truth/camera_info,/D5/ground_truth/camera_info,/D6/ground_truth/camera_info,/D7/ground_truth/camera_info,/D8/ground_truth/camera_info]' \
+  -p lockstep:=true -p lockstep_topic:=/tracks -p lockstep_type:=matrix_msgs/msg/TrackArray -p lockstep_timeout:=60.0 \
+  > "$OUT/live/player.log" 2>&1
+sleep 1
+cleanup
+grep -h "played\|published" "$OUT/live/player.log" "$OUT/live/fuse.log" | tail -n 2
+echo "== scores of the live recording (tracks and detections published by fuse) against the bag's ground truth"
+matrix-tracker evaluate-recording "$OUT/live/recording" --ground-truth "$OUT/sim/bag" --json "$OUT/live/metrics.json"
+
+echo "== the same checkpoint offline on the same frames (ground-truth calibration), with pictures"
 matrix-tracker evaluate "$OUT/sim" --checkpoint "$CKPT" --out "$OUT/bev" --heatmaps 2
-echo "pictures: $OUT/graph_overview.png, $OUT/bev/trajectories.png, $OUT/bev/heatmap_*.png"
+echo "logs: $OUT/live/*.log; pictures: $OUT/graph_overview.png, $OUT/bev/trajectories.png, $OUT/bev/heatmap_*.png"

@@ -79,6 +79,8 @@ def test_temporal_previous_changes_output_and_registry(model, frame_inputs):
     first = run(model, item, data.grid.shape)
     second = run(model, item, data.grid.shape, previous=first['bev'])
     assert not torch.allclose(first['heatmap'], second['heatmap'])
+    # the features handed on are the one-step memory training feeds, not a chain over all past frames
+    torch.testing.assert_close(second['bev'], first['bev'])
     assert {'bev_small', 'bev_tiny'} <= set(MODELS)
     with pytest.raises(ValueError, match='known'):
         build_model('resnet_from_a_string_if_elif')

@@ -7,7 +7,8 @@ import pytest
 import torch
 
 from matrix_core.bev.config import SequenceSpec, TrainConfig, load_config
-from matrix_core.bev.data import BevFrames
+from matrix_core.bev.data import BevFrames, ground_truth_positions
+from matrix_core.bev.decode import decode_detections
 from matrix_core.bev.registry import build_model
 from matrix_core.bev.settings import BevSettings
 from matrix_core.bev.training import seed_everything, training_step
@@ -60,7 +61,10 @@ seed: 3
 """)
     out = tmp_path / 'run'
     assert main(['train', '--config', str(cfg), '--out', str(out)]) == 0
-    assert main(['train', '--config', str(cfg), '--out', str(out), '--resume', '--epochs', '2']) == 0
+    assert main(['train', '--config', str(cfg), '--out', str(out), '--resume', '--epochs', '2',
+                 '--export', str(tmp_path / 'shipped.pt')]) == 0
+    shipped = torch.load(tmp_path / 'shipped.pt', weights_only=False)
+    assert set(shipped) == {'model', 'settings', 'epoch', 'history', 'trained_with'} and shipped['epoch'] == 2
     history = json.loads((out / 'history.json').read_text())
     assert [h['epoch'] for h in history] == [1, 2] and 'val_moda' in history[-1]
     assert (out / 'best.pt').is_file() and (out / 'last.pt').is_file()
@@ -86,3 +90,48 @@ def test_config_errors_are_clear(tmp_path):
     with pytest.raises(FileNotFoundError, match='shipped'):
         load_config('no_such_config')
     assert load_config('complex').bev.model == 'bev_small'
+
+
+@pytest.mark.slow
+def test_offset_heads_overfit_a_few_frames(matrix_sample):
+    """With the default loss weights the sub-cell offset and tracking offset heads learn their targets, and
+    decoding (peak cell + offset) puts the detections closer to the people than the cell centres are."""
+    torch.set_num_threads(1)
+    seed_everything(0)
+    settings = BevSettings(model='bev_tiny', image_width=160, image_height=96, cell_m=0.5)
+    data = BevFrames(matrix_sample, settings, frames=[1, 2, 3])
+    config = TrainConfig(train=[SequenceSpec(str(matrix_sample))], bev=settings, view_dropout=0.0)
+    model = build_model('bev_tiny')
+    opt = torch.optim.AdamW(model.parameters(), lr=3e-3)
+    rng = np.random.default_rng(0)
+    zero = {}
+    for k in (1, 2):
+        item = data[k]
+        zero[k] = (float(item['offset'][:, item['center_mask'][0] > 0].abs().mean()),
+                   float(item['tracking'][:, item['tracking_mask'][0] > 0].abs().mean()))
+    for step in range(120):
+        terms = training_step(model, [data], [(0, 1 + step % 2)], config, rng)
+        opt.zero_grad()
+        terms['total'].backward()
+        opt.step()
+    model.train()
+    with torch.no_grad():
+        for k in (1, 2):
+            terms = training_step(model, [data], [(0, k)], config, rng)
+            print(f"frame {k}: offset L1 {float(terms['offset']):.3f} m (zero {zero[k][0]:.3f}), "
+                  f"tracking L1 {float(terms['tracking']):.3f} m (zero {zero[k][1]:.3f})")
+            assert float(terms['offset']) < 0.5 * zero[k][0]
+            assert float(terms['tracking']) < 0.5 * zero[k][1]
+        x, prev = data.inputs(2), data.inputs(1)
+        shape = data.grid.shape
+        previous = model(prev['images'][None], prev['feat_H_grid'][None], prev['view_mask'][None], shape)['bev']
+        out = model(x['images'][None], x['feat_H_grid'][None], x['view_mask'][None], shape, previous)
+    dets = decode_detections(out['heatmap'][0], out['offset'][0], out['tracking'][0], data.grid, 0.3,
+                             subcell='offset')
+    truth = np.array(list(ground_truth_positions(data.dataset, 2).values()))
+    cells = data.grid.cell_to_world(np.round(data.grid.world_to_cell(dets.xy)))
+    nearest = lambda xy: np.linalg.norm(xy[:, None] - truth[None], axis=2).min(axis=1)
+    print(f'{len(dets)} detections, {len(truth)} people; error with offsets {np.median(nearest(dets.xy)):.3f} m, '
+          f'cell centres {np.median(nearest(cells)):.3f} m')
+    assert len(dets) >= 0.9 * len(truth)
+    assert np.median(nearest(dets.xy)) < 0.6 * np.median(nearest(cells))

@@ -4,6 +4,8 @@ Error: the registration's ground-plane homography against the one from the store
 a 0.5 m grid of ground points visible in the current frame, in full-resolution pixels.
 """
 
+from dataclasses import replace
+
 import cv2
 import numpy as np
 import pytest
@@ -65,7 +67,7 @@ def test_rekeying_chains_through_a_key_frame_and_stays_accurate(matrix_sample):
     """Force re-keying after every frame: later frames register to a key frame, chained to the reference."""
     cv2.setNumThreads(1)
     dataset = MatrixDataset(matrix_sample)
-    settings = RegisterSettings(rekey_after=1, rekey_confidence=1.01, good_confidence=0.0)
+    settings = RegisterSettings(rekey_after=1, rekey_confidence=1.01, good_confidence=0.0, retry_reference_every=0)
     results = _register_all(dataset, settings, views=['D2'], frames=[0, 2, 4])
     (r0, e0), (r2, e2), (r4, e4) = (results['D2', f] for f in (0, 2, 4))
     assert r0.reference_id == 'D2/reference' and 're-keyed' in r0.message and 'frame 0' in r0.message
@@ -88,3 +90,41 @@ def test_an_image_without_features_fails_and_publishes_no_homography(matrix_samp
     assert small.status == 'failed' and '960x540' in small.message
     # The registrar goes on working after failures.
     assert registrar.register(dataset.load_image('D1', 0), 2).ok
+
+
+def test_rekeyed_registrar_returns_to_the_original_reference(matrix_sample):
+    """Forced re-keying on frame 0, then: the reference is retried every 2 frames and takes over again when it
+    registers well; a retry that is not good enough keeps the key frame; a weak chained frame retries at once."""
+    cv2.setNumThreads(1)
+    dataset = MatrixDataset(matrix_sample)
+    ref = dataset.reference_camera('D2')
+    settings = RegisterSettings(rekey_after=1, rekey_confidence=1.01, good_confidence=0.0, retry_reference_every=2)
+    registrar = Registrar(settings, cv2.imread(str(dataset.reference_image_path('D2'))), ref, dataset.area,
+                          'D2/reference')
+
+    def register(frame):
+        r = registrar.register(dataset.load_image('D2', frame), frame)
+        assert r.ok, r.message
+        assert homography_error_px(r.H_cur_to_ref, dataset.camera('D2', frame), ref, dataset.area,
+                                   settings.exclude_boxes) < 1.5
+        return r
+
+    assert 're-keyed' in register(0).message  # every frame is weak (rekey_confidence > 1)
+    registrar.settings = replace(settings, rekey_confidence=0.1)  # from now on frames are strong
+    for frame in (1, 2):  # 0 and 1 frames done on the key: no retry
+        r = register(frame)
+        assert r.reference_id == 'D2/reference<-key:0' and 'reference' not in r.message
+    # After 2 frames on the key the retry is due, but a confidence above 1 is never good enough -> stays.
+    registrar.settings = replace(settings, rekey_confidence=0.1, good_confidence=1.01)
+    r3 = register(3)
+    assert r3.reference_id == 'D2/reference<-key:0' and 'reference retried, stays on key:0' in r3.message
+    registrar.settings = replace(settings, rekey_confidence=0.1)
+    assert register(4).reference_id == 'D2/reference<-key:0'  # 3 frames done: not due
+    r = register(1)  # 4 frames done: due and good -> back on the reference
+    assert r.reference_id == 'D2/reference' and 'back on the reference (retried after 4 frames on key:0)' in r.message
+    assert registrar.key is None
+    # A weak chained frame tries the reference at once (not waiting for the period).
+    registrar.settings = replace(settings, retry_reference_every=100)
+    assert 're-keyed' in register(0).message
+    r = register(1)
+    assert r.reference_id == 'D2/reference' and 'back on the reference (retried after 0 frames on key:0)' in r.message

@@ -4,7 +4,6 @@ import json
 
 import cv2
 import numpy as np
-import pytest
 
 from matrix_core.cli.main import main
 from matrix_core.datasets.opencv_xml import read_matrices
@@ -45,6 +44,22 @@ def test_cli_writes_registrations_in_the_file_frame(matrix_sample, tmp_path, cap
     summary = json.loads((folder / 'summary.json').read_text())
     assert summary['stats']['failed'] == 0 and summary['stats']['error_px_max'] < 1.5
     assert 'registered 4/4 images' in capsys.readouterr().out
+    # Overlay pictures: the first frame of each drone by default.
+    assert sorted(p.name for p in (folder / 'overlay').glob('*.png')) == ['Drone3_0000.png', 'Drone8_0000.png']
+
+
+def test_cli_png_writes_every_frame_and_takes_the_scene_from_a_simulated_folder(tmp_path, capsys):
+    from matrix_core.sim.sequence import simulate
+    from matrix_core.sim.settings import SimulateSettings
+
+    sim = tmp_path / 'sim'
+    simulate(SimulateSettings(config='simple', frames=2, seed=1, out=str(sim), fast=True), progress=False)
+    assert main(['register', str(sim), '--out', str(tmp_path / 'out'), '--views', 'D2', '--png']) == 0
+    out = capsys.readouterr().out
+    # The simple variant has no block: nothing to pass on the command line, the folder says so.
+    assert '0 obstacle box(es)' in out and 'registered 2/2 images' in out
+    assert sorted(p.name for p in (tmp_path / 'out/registration/overlay').glob('*.png')) == \
+        ['Drone2_0000.png', 'Drone2_0001.png']
 
 
 def test_cli_rejects_unknown_views_and_non_matrix_folders(matrix_sample, tmp_path, capsys):

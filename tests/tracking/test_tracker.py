@@ -88,7 +88,7 @@ def single(xy, score=0.9):
 
 
 def test_birth_after_k_hits_and_death_after_m_misses():
-    tr = BevTracker(TrackerSettings(birth_hits=3, max_misses=2))
+    tr = BevTracker(TrackerSettings(birth_hits=3, max_misses=2, confirm_first_frame=False))
     assert tr.update(single([0, 0])) == []
     assert tr.update(single([0.5, 0])) == []
     out = tr.update(single([1.0, 0]))
@@ -102,6 +102,20 @@ def test_birth_after_k_hits_and_death_after_m_misses():
         tr.update(single(np.zeros((0, 2))))
     assert tr.update(single([4.0, 0])) == []
     assert tr.update(single([4.5, 0])) == [] and [o.track_id for o in tr.update(single([5.0, 0]))] == [2]
+
+
+def test_first_frame_tracks_are_confirmed_at_once_and_coasting_is_reported_only_on_request():
+    tr = BevTracker(TrackerSettings(birth_hits=2, report_coasting=1))
+    assert [o.track_id for o in tr.update(single([0, 0]))] == [1]        # first frame: id at once
+    assert [o.track_id for o in tr.update(single([[0, 0], [5, 5]]))] == [1]   # newcomers wait birth_hits
+    out = tr.update(single(np.zeros((0, 2))))                             # track 1 coasts one frame
+    assert [(o.track_id, o.misses) for o in out] == [(1, 1)]
+    assert tr.update(single(np.zeros((0, 2)))) == []                      # two misses > report_coasting
+    tr.reset()
+    assert [o.track_id for o in tr.update(single([0, 0]))] == [1]        # first frame again after reset()
+    quiet = BevTracker(TrackerSettings(birth_hits=2))
+    quiet.update(single([0, 0]))
+    assert quiet.update(single(np.zeros((0, 2)))) == []                   # default: misses are not reported
 
 
 def test_low_scores_extend_but_never_start_tracks_and_reset_restarts_ids():

@@ -21,5 +21,5 @@ setup(
     description="Bird's-eye-view multi-view fusion network and tracker: publishes detections and tracks.",
     license='Apache-2.0',
     # Node executables are added here by the issue that implements each node.
-    entry_points={'console_scripts': []},
+    entry_points={'console_scripts': ['fuse = matrix_bev_tracker.fuse_node:main']},
 )

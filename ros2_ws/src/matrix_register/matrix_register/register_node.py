@@ -8,10 +8,13 @@ Per view ``V`` in ``views`` (several drones per process; one per namespace works
   ``/diagnostics`` (diagnostic_msgs/DiagnosticArray: status, confidence, inliers, reference, re-keying).
 
 Reference: ``reference_dataset``'s ``reference/`` image and calibration of ``V`` (MATRIX ships one per
-drone), or else the first frame that arrives together with a CameraInfo (``p = K [R | t]``, see
-``matrix_ros.conversions``). The homography convention is that of
-:class:`matrix_core.register.result.RegistrationResult`; failed frames are published with status
-``failed: <reason>`` and all-zero matrices (never a made-up homography).
+drone; its ``matrix_tracker_meta.json`` also gives the obstacles, see ``matrix_core.register.scene``), or
+else the first image whose CameraInfo (``p = K [R | t]``, see ``matrix_ros.conversions``) has the SAME
+header stamp, in whichever order the two arrive: a calibration of another instant would make every
+homography wrong. Images that wait for their CameraInfo are held (at most ``PENDING`` per view); one that
+falls out, or is older than the reference that starts, is published as failed. The homography convention
+is that of :class:`matrix_core.register.result.RegistrationResult`; failed frames are published with
+status ``failed: <reason>`` and all-zero matrices (never a made-up homography).
 """
 
 from dataclasses import dataclass, field
@@ -26,6 +29,7 @@ from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from matrix_core.datasets import DatasetError, MatrixDataset
 from matrix_core.register.backends import make_backend
 from matrix_core.register.registrar import Registrar
+from matrix_core.register.scene import settings_for_dataset
 from matrix_core.register.settings import RegisterSettings
 from matrix_ros.conversions import ConversionError, camera_info_to_camera, compressed_to_image, msg_to_image
 from matrix_ros.params import declare_settings, spin_node
@@ -59,8 +63,20 @@ class RegisterNodeSettings(RegisterSettings):
             raise ValueError(f'area must be x_min y_min x_max y_max, got {self.area}')
 
 
+PENDING = 5  # images per view held while waiting for the CameraInfo of the same stamp
+CAMERA_INFOS = 50  # CameraInfos per view kept to pair with later images
+
+
 def _flat(H) -> list:
     return [0.0] * 9 if H is None else [float(v) for v in np.asarray(H).reshape(-1)]
+
+
+def _key(stamp) -> tuple:
+    return (int(stamp.sec), int(stamp.nanosec))
+
+
+def _stamp_text(stamp) -> str:
+    return f'{stamp.sec}.{stamp.nanosec:09d}'
 
 
 class RegisterNode(Node):
@@ -68,11 +84,17 @@ class RegisterNode(Node):
         super().__init__('register')
         self.settings = s = declare_settings(self, RegisterNodeSettings, defaults)
         self.backend = make_backend(s)
-        self.registrars, self.camera_infos, self.pubs = {}, {}, {}
+        self.registrars, self.pubs = {}, {}
+        self.camera_infos = {v: {} for v in s.views}  # view -> {stamp key: CameraInfo}
+        self.pending = {v: {} for v in s.views}  # view -> {stamp key: (msg, image)} waiting for a CameraInfo
         self.area = tuple(s.area)
         dataset = MatrixDataset(s.reference_dataset) if s.reference_dataset else None
         if dataset is not None:
             self.area = dataset.area
+            self.settings, note = settings_for_dataset(s, dataset)
+            s = self.settings
+            if note:
+                self.get_logger().info(note)
         qos = qos_by_name(s.qos)
         for view in s.views:
             if dataset is not None:
@@ -84,7 +106,7 @@ class RegisterNode(Node):
                                                   f'{view}/reference', self.backend)
             else:
                 self.create_subscription(CameraInfo, f'/{view}/{s.camera_info_topic}',
-                                         lambda m, v=view: self.camera_infos.__setitem__(v, m), 10)
+                                         lambda m, v=view: self._on_camera_info(v, m), 10)
             if s.compressed:
                 self.create_subscription(CompressedImage, f'/{view}/image/compressed',
                                          lambda m, v=view: self._on_image(v, m, compressed_to_image), qos)
@@ -96,33 +118,84 @@ class RegisterNode(Node):
         self.get_logger().info(f'registering {s.views} with backend {self.backend.name} at scale {s.scale}; '
                                f'reference: {s.reference_dataset or "first frame with CameraInfo"}')
 
-    def _registrar(self, view: str, image: np.ndarray, stamp):
-        """The view's registrar; without a configured reference, the first frame with a CameraInfo starts it."""
+    def _on_camera_info(self, view: str, msg: CameraInfo) -> None:
         if view in self.registrars:
-            return self.registrars[view]
-        info = self.camera_infos.get(view)
-        if info is None:
-            self.get_logger().warning(f'{view}: no reference yet (waiting for /{view}/'
-                                      f'{self.settings.camera_info_topic})', throttle_duration_sec=5.0)
-            return None
-        camera = camera_info_to_camera(info)
-        self.registrars[view] = Registrar(self.settings, image, camera, self.area,
-                                          f'{view}/frame/{stamp.sec}.{stamp.nanosec:09d}', self.backend)
-        self.get_logger().info(f'{view}: reference is the first frame with a CameraInfo')
-        return self.registrars[view]
+            return
+        infos = self.camera_infos[view]
+        infos[_key(msg.header.stamp)] = msg
+        while len(infos) > CAMERA_INFOS:
+            infos.pop(min(infos))
+        held = self.pending[view].pop(_key(msg.header.stamp), None)
+        if held is not None:
+            self._start_reference(view, *held)
+
+    def _start_reference(self, view: str, msg, image) -> None:
+        """Make ``image`` (with its same-stamp CameraInfo) the reference, then register it and the held images."""
+        stamp = msg.header.stamp
+        info = self.camera_infos[view].pop(_key(stamp))
+        try:
+            camera = camera_info_to_camera(info)
+            self.registrars[view] = Registrar(self.settings, image, camera, self.area,
+                                              f'{view}/frame/{_stamp_text(stamp)}', self.backend)
+        except (ConversionError, ValueError) as exc:
+            self._bad_input(view, msg, f'cannot make it the reference: {exc}')
+            return
+        self.camera_infos[view].clear()
+        self.get_logger().info(f'{view}: reference is the image at {_stamp_text(stamp)} (its CameraInfo)')
+        self._publish(view, msg, self.registrars[view].reference_result())
+        for key in sorted(self.pending[view]):
+            held_msg, held_image = self.pending[view].pop(key)
+            if key < _key(stamp):
+                self._publish_failed(view, held_msg, 'arrived before the reference image (no CameraInfo of its stamp)')
+            else:
+                self._register(view, held_msg, held_image)
+
+    def _hold(self, view: str, msg, image) -> None:
+        """Keep an image until its CameraInfo arrives; the oldest held image is failed when too many wait."""
+        pending = self.pending[view]
+        pending[_key(msg.header.stamp)] = (msg, image)
+        self.get_logger().warning(f'{view}: no reference yet (waiting for a /{view}/{self.settings.camera_info_topic}'
+                                  f' with the stamp of an image)', throttle_duration_sec=5.0)
+        while len(pending) > PENDING:
+            old_msg, _ = pending.pop(min(pending))
+            self._publish_failed(view, old_msg, f'no reference: no CameraInfo with stamp '
+                                                f'{_stamp_text(old_msg.header.stamp)} arrived')
 
     def _on_image(self, view: str, msg, decode) -> None:
         try:
             image = decode(msg)
-            registrar = self._registrar(view, image, msg.header.stamp)
         except (ConversionError, ValueError) as exc:
-            self.get_logger().error(f'{view}: image at {msg.header.stamp.sec}.{msg.header.stamp.nanosec:09d} '
-                                    f'not registered: {exc}')
-            self._diagnose(view, msg.header, DiagnosticStatus.ERROR, f'bad input: {exc}', None)
+            self._bad_input(view, msg, str(exc))
             return
-        if registrar is None:
+        if view in self.registrars:
+            self._register(view, msg, image)
+        elif _key(msg.header.stamp) in self.camera_infos[view]:
+            self._start_reference(view, msg, image)
+        else:
+            self._hold(view, msg, image)
+
+    def _bad_input(self, view: str, msg, text: str) -> None:
+        self.get_logger().error(f'{view}: image at {_stamp_text(msg.header.stamp)} not registered: {text}')
+        self._diagnose(view, msg.header, DiagnosticStatus.ERROR, f'bad input: {text}', None)
+
+    def _publish_failed(self, view: str, msg, reason: str) -> None:
+        out = HomographyStamped(header=msg.header)
+        out.h_cur_to_ref, out.h_img_to_ground = _flat(None), _flat(None)
+        out.status, out.backend = f'failed: {reason}', self.backend.name
+        self.pubs[view].publish(out)
+        self.get_logger().warning(f'{view}: image at {_stamp_text(msg.header.stamp)} not registered: {reason}')
+        self._diagnose(view, msg.header, DiagnosticStatus.WARN, out.status, None)
+
+    def _register(self, view: str, msg, image) -> None:
+        registrar = self.registrars[view]
+        try:
+            result = registrar.register(image, _stamp_text(msg.header.stamp))
+        except ValueError as exc:
+            self._bad_input(view, msg, str(exc))
             return
-        result = registrar.register(image, f'{msg.header.stamp.sec}.{msg.header.stamp.nanosec:09d}')
+        self._publish(view, msg, result)
+
+    def _publish(self, view: str, msg, result) -> None:
         out = HomographyStamped(header=msg.header)
         out.h_cur_to_ref, out.h_img_to_ground = _flat(result.H_cur_to_ref), _flat(result.H_img_to_ground)
         out.confidence, out.matches, out.inliers = float(result.confidence), result.matches, result.inliers
@@ -143,7 +216,8 @@ class RegisterNode(Node):
             status.values = [KeyValue(key=k, value=str(v)) for k, v in (
                 ('confidence', f'{result.confidence:.3f}'), ('matches', result.matches),
                 ('inliers', result.inliers), ('reference_id', result.reference_id),
-                ('backend', result.backend), ('seconds', f'{result.seconds:.3f}'))]
+                ('backend', result.backend), ('seconds', f'{result.seconds:.3f}'),
+                ('message', result.message))]
         self.diag_pub.publish(DiagnosticArray(header=header, status=[status]))
 
 

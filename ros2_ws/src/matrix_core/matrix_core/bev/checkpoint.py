@@ -33,3 +33,16 @@ def load_model(path, settings_overrides: dict = None) -> tuple:
     model = build_model(settings.model, temporal=settings.temporal)
     model.load_state_dict(ckpt['model'])
     return model.eval(), settings
+
+
+def export_checkpoint(src, dst, trained_with: str = '') -> Path:
+    """Write the shippable part of a training checkpoint (``model``, ``settings``, ``epoch``, ``history``,
+    ``trained_with``: no optimizer state, a third of the size) from ``src`` (e.g. ``last.pt``) to ``dst``."""
+    ckpt = load_checkpoint(src)
+    dst = Path(dst)
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    tmp = dst.with_suffix(dst.suffix + '.tmp')
+    torch.save({'model': ckpt['model'], 'settings': ckpt['settings'], 'epoch': ckpt.get('epoch'),
+                'history': ckpt.get('history', []), 'trained_with': trained_with}, tmp)
+    tmp.replace(dst)
+    return dst

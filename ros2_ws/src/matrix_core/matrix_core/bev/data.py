@@ -14,10 +14,19 @@ MEAN = np.array([0.485, 0.456, 0.406], np.float32)
 STD = np.array([0.229, 0.224, 0.225], np.float32)
 
 
+def resize_rgb(bgr: np.ndarray, size: tuple) -> np.ndarray:
+    """(H, W, 3) uint8 BGR -> (h, w, 3) uint8 RGB at ``size`` = (w, h) (what the image cache keeps)."""
+    return cv2.cvtColor(cv2.resize(bgr, size, interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2RGB)
+
+
+def normalise_rgb(rgb: np.ndarray) -> np.ndarray:
+    """(h, w, 3) uint8 RGB -> (3, h, w) float32 normalised with the ImageNet mean/std."""
+    return ((rgb.astype(np.float32) / 255.0 - MEAN) / STD).transpose(2, 0, 1)
+
+
 def prepare_image(bgr: np.ndarray, size: tuple) -> np.ndarray:
     """(H, W, 3) uint8 BGR -> (3, h, w) float32 normalised RGB at ``size`` = (w, h)."""
-    rgb = cv2.cvtColor(cv2.resize(bgr, size, interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2RGB)
-    return ((rgb.astype(np.float32) / 255.0 - MEAN) / STD).transpose(2, 0, 1)
+    return normalise_rgb(resize_rgb(bgr, size))
 
 
 def ground_truth_positions(dataset, frame: int) -> dict:
@@ -33,7 +42,8 @@ class BevFrames(torch.utils.data.Dataset):
 
     Item ``k`` is a dict: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3) float32, ``view_mask`` (V,) bool,
     the target arrays of :func:`bev_targets`, ``frame`` int, and ``prev_frame`` (the previous frame of the
-    sequence, -1 for the first). Views missing in ``views`` or whose image cannot be read are masked out.
+    sequence, -1 for the first). Views missing in ``views``, and views the calibration source has no
+    homography for in a frame (PnP failed, registration failed), are masked out for that frame.
 
     Args:
         root: MATRIX folder.
@@ -41,11 +51,13 @@ class BevFrames(torch.utils.data.Dataset):
         frames: frames to use (default: all with images and calibration).
         calibration: a name in ``CALIBRATION_SOURCES``.
         views: views to use (default all); the others are masked.
-        cache_images: keep resized images in memory (small datasets).
+        cache_images: keep resized images in memory (uint8; about 0.4 MB per view and frame at 480x272).
+        calibration_dir: output folder of ``matrix-tracker calibrate``/``register`` for the ``pnp``/
+            ``registration`` sources.
     """
 
     def __init__(self, root, settings: BevSettings, frames=None, calibration: str = 'ground_truth', views=None,
-                 cache_images: bool = True):
+                 cache_images: bool = True, calibration_dir=None):
         self.dataset = open_dataset(root)
         self.settings = settings
         self.frames = tuple(frames) if frames is not None else tuple(self.dataset.frames)
@@ -53,7 +65,8 @@ class BevFrames(torch.utils.data.Dataset):
         if missing:
             raise ValueError(f'{root}: frames {sorted(missing)[:5]} have no images/calibration')
         self.grid = settings.grid(self.dataset.area)
-        self.homography_of = calibration_source(calibration, self.dataset, self.frames)
+        self.calibration = calibration
+        self.homography_of = calibration_source(calibration, self.dataset, self.frames, calibration_dir)
         self.views = tuple(self.dataset.views)
         self.use_views = set(views) if views else set(self.views)
         self.input_size = (settings.image_width, settings.image_height)
@@ -66,28 +79,36 @@ class BevFrames(torch.utils.data.Dataset):
     def image(self, view: str, frame: int) -> np.ndarray:
         key = (view, frame)
         if self._cache is not None and key in self._cache:
-            return self._cache[key]
-        img = prepare_image(self.dataset.load_image(view, frame), self.input_size)
+            return normalise_rgb(self._cache[key])
+        rgb = resize_rgb(self.dataset.load_image(view, frame), self.input_size)
         if self._cache is not None:
-            self._cache[key] = img
-        return img
+            self._cache[key] = rgb      # uint8: a quarter of the memory of the float input
+        return normalise_rgb(rgb)
 
     def homographies(self, frame: int) -> np.ndarray:
-        """(V, 3, 3) float32 ``feat_H_grid`` of every view at ``frame``."""
-        out = []
+        """(V, 3, 3) float32 ``feat_H_grid`` of every view at ``frame`` (zeros where the source has none)."""
+        return self.homographies_and_availability(frame)[0]
+
+    def homographies_and_availability(self, frame: int) -> tuple:
+        """(feat_H_grid (V, 3, 3) float32, available (V,) bool) at ``frame``; a view without a homography
+        from the calibration source gets zeros (nothing lies in front of it) and available False."""
+        out, available = [], []
         for v in self.views:
-            img_H_ground, size = self.homography_of(v, frame)
-            out.append(feat_H_grid(img_H_ground, self.grid.ground_H_grid, size, self.input_size, self.stride))
-        return np.stack(out).astype(np.float32)
+            h = self.homography_of(v, frame)
+            available.append(h is not None)
+            out.append(np.zeros((3, 3)) if h is None else
+                       feat_H_grid(h[0], self.grid.ground_H_grid, h[1], self.input_size, self.stride))
+        return np.stack(out).astype(np.float32), np.array(available, dtype=bool)
 
     def inputs(self, frame: int) -> dict:
         """Network inputs of one frame: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3), ``view_mask`` (V,)."""
-        mask = np.array([v in self.use_views for v in self.views])
+        H, available = self.homographies_and_availability(frame)
+        mask = np.array([v in self.use_views for v in self.views]) & available
         images = np.zeros((len(self.views), 3, self.input_size[1], self.input_size[0]), np.float32)
         for i, v in enumerate(self.views):
             if mask[i]:
                 images[i] = self.image(v, frame)
-        return {'images': torch.from_numpy(images), 'feat_H_grid': torch.from_numpy(self.homographies(frame)),
+        return {'images': torch.from_numpy(images), 'feat_H_grid': torch.from_numpy(H),
                 'view_mask': torch.from_numpy(mask)}
 
     def __getitem__(self, k: int) -> dict:

@@ -37,7 +37,7 @@ class SequenceRunner:
         out = self.model(images[None], feat_H_grid[None], view_mask[None], self.grid.shape, self.previous)
         self.previous = out['bev'] if s.temporal else None
         dets = decode_detections(out['heatmap'][0], out['offset'][0], out['tracking'][0], self.grid,
-                                 s.score_threshold, s.nms_radius_m, s.max_detections)
+                                 s.score_threshold, s.nms_radius_m, s.max_detections, s.subcell)
         return FrameOutput(frame, dets, torch.sigmoid(out['heatmap'][0, 0]).numpy())
 
 

@@ -17,6 +17,7 @@ class BevSettings:
     score_threshold: float = field(default=0.3, metadata={'help': 'decoded peaks below this heatmap score are dropped'})
     nms_radius_m: float = field(default=0.5, metadata={'help': 'peaks closer than this (m) are suppressed by max-pool NMS'})
     max_detections: int = field(default=200, metadata={'help': 'keep at most this many peaks per frame'})
+    subcell: str = field(default='heatmap', metadata={'help': "sub-cell position of a peak: 'heatmap' (3x3 score centroid, the most precise measured), 'offset' (offset head) or 'none' (cell centre)"})
     temporal: bool = field(default=True, metadata={'help': 'fuse the previous frame\'s BEV features'})
 
     def __post_init__(self):
@@ -29,6 +30,8 @@ class BevSettings:
             raise ValueError(f'area needs 4 numbers x_min y_min x_max y_max, got {self.area}')
         if self.image_width % 8 or self.image_height % 8 or self.image_width <= 0 or self.image_height <= 0:
             raise ValueError(f'image size must be positive multiples of 8, got {self.image_width}x{self.image_height}')
+        if self.subcell not in ('heatmap', 'offset', 'none'):
+            raise ValueError(f"subcell must be 'heatmap', 'offset' or 'none', got {self.subcell!r}")
         if not 0 <= self.score_threshold <= 1 or self.max_detections < 1:
             raise ValueError('score_threshold must be in [0, 1] and max_detections >= 1')
 

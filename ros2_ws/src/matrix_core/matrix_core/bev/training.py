@@ -31,11 +31,12 @@ def open_sequences(specs: list, config: TrainConfig) -> list:
     out = []
     for spec in specs:
         path = Path(os.path.expanduser(os.path.expandvars(spec.path)))
+        cdir = os.path.expanduser(os.path.expandvars(spec.calibration_dir)) if spec.calibration_dir else None
         probe = BevFrames(path, config.bev, calibration=spec.calibration, views=spec.views,
-                          cache_images=config.cache_images)
+                          cache_images=config.cache_images, calibration_dir=cdir)
         frames = spec.frame_list(probe.frames)
         out.append(probe if frames == list(probe.frames) else
-                   BevFrames(path, config.bev, frames, spec.calibration, spec.views, config.cache_images))
+                   BevFrames(path, config.bev, frames, spec.calibration, spec.views, config.cache_images, cdir))
     return out
 
 
@@ -47,6 +48,16 @@ def drop_views(mask: torch.Tensor, p: float, min_views: int, rng: np.random.Gene
     out = mask.clone()
     out[torch.as_tensor(drop, dtype=torch.long)] = False
     return out
+
+
+def learning_rate(config: TrainConfig, step: int, total_steps: int) -> float:
+    """Learning rate at global ``step`` of ``total_steps`` (a pure function of the step, so resume needs no
+    scheduler state): constant, or cosine from ``lr`` down to ``lr_min_ratio * lr``."""
+    if config.lr_schedule == 'constant' or total_steps <= 1:
+        return config.lr
+    t = min(step / (total_steps - 1), 1.0)
+    low = config.lr * config.lr_min_ratio
+    return low + 0.5 * (config.lr - low) * (1.0 + np.cos(np.pi * t))
 
 
 def _batch(items: list) -> dict:
@@ -80,7 +91,7 @@ def training_step(model, sequences, picks, config: TrainConfig, rng) -> dict:
     targets = {k: batch[k] for k in TARGET_KEYS}
     if not config.bev.temporal or not any(prev_valid):
         targets['tracking_mask'] = torch.zeros_like(targets['tracking_mask'])
-    return bev_loss(out, targets)
+    return bev_loss(out, targets, config.loss_weights)
 
 
 def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: bool = True, log=print) -> list:
@@ -109,6 +120,10 @@ def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: boo
         torch.set_rng_state(ckpt['torch_rng'])
         log(f'resumed from {last} after epoch {start_epoch}')
     index = [(si, k) for si, s in enumerate(sequences) for k in range(len(s))]
+    steps_per_epoch = -(-len(index) // config.batch_size)
+    if config.max_steps_per_epoch:
+        steps_per_epoch = min(steps_per_epoch, config.max_steps_per_epoch)
+    total_steps = steps_per_epoch * config.epochs
     for epoch in range(start_epoch, config.epochs):
         rng = np.random.default_rng(config.seed * 1000 + epoch)
         order = [index[i] for i in rng.permutation(len(index))]
@@ -118,7 +133,9 @@ def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: boo
         model.train()
         sums = {}
         bar = tqdm(batches, desc=f'epoch {epoch + 1}/{config.epochs}', unit='batch', disable=not progress)
-        for picks in bar:
+        for i, picks in enumerate(bar):
+            for group in optimizer.param_groups:
+                group['lr'] = learning_rate(config, epoch * steps_per_epoch + i, total_steps)
             terms = training_step(model, sequences, picks, config, rng)
             optimizer.zero_grad()
             terms['total'].backward()

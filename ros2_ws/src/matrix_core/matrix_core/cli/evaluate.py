@@ -20,6 +20,8 @@ def add_parser(subparsers) -> None:
     p.add_argument('--frames', type=int, nargs=2, metavar=('FIRST', 'LAST'), help='frame range (inclusive)')
     p.add_argument('--calibration', default='ground_truth', choices=sorted(CALIBRATION_SOURCES),
                    help='calibration source per frame (default: ground_truth)')
+    p.add_argument('--calibration-dir', help='output folder of matrix-tracker calibrate (pnp) or register '
+                   '(registration) for those calibration sources')
     p.add_argument('--drop-views', nargs='*', default=[], help='views to remove at test time, e.g. D2 D6')
     p.add_argument('--score-threshold', type=float, help='override the checkpoint\'s decoding threshold')
     p.add_argument('--out', default='out/evaluate', help='folder for PNGs, text files and metrics.json')
@@ -41,7 +43,8 @@ def run(args) -> int:
     torch.set_num_threads(1)
     overrides = {} if args.score_threshold is None else {'score_threshold': args.score_threshold}
     model, settings = load_model(args.checkpoint, overrides)
-    probe = BevFrames(args.dataset, settings, calibration=args.calibration, cache_images=False)
+    probe = BevFrames(args.dataset, settings, calibration=args.calibration, cache_images=False,
+                      calibration_dir=args.calibration_dir)
     unknown = set(args.drop_views) - set(probe.views)
     if unknown:
         raise ValueError(f'--drop-views: unknown views {sorted(unknown)}; views are {probe.views}')
@@ -49,7 +52,8 @@ def run(args) -> int:
     if not frames:
         raise ValueError(f'no frames of {args.dataset} in {args.frames}')
     views = [v for v in probe.views if v not in args.drop_views]
-    data = BevFrames(args.dataset, settings, frames, args.calibration, views, cache_images=False)
+    data = BevFrames(args.dataset, settings, frames, args.calibration, views, cache_images=False,
+                     calibration_dir=args.calibration_dir)
     result = evaluate(model, data, settings_from_namespace(TrackerSettings, args))
     print(format_metrics(result.detection, result.tracking))
     out = Path(args.out)
@@ -59,7 +63,8 @@ def run(args) -> int:
     write_bev_points(out / 'ground_truth.txt', result.gt)
     (out / 'metrics.json').write_text(json.dumps({'detection': result.detection.as_dict(),
                                                   'tracking': result.tracking.as_dict(),
-                                                  'calibration': args.calibration, 'views': views}, indent=2))
+                                                  'calibration': args.calibration, 'views': views,
+                                                  'calibration_dir': args.calibration_dir}, indent=2))
     step = max(len(result.outputs) // max(args.heatmaps, 1), 1)
     for o in result.outputs[::step][:args.heatmaps]:
         gt = result.gt.xy[result.gt.frames == o.frame]

@@ -9,7 +9,8 @@ import sys
 
 from matrix_core.datasets.types import DatasetError
 
-SUBCOMMANDS = ('info', 'bag', 'track', 'score', 'register', 'train', 'evaluate', 'calibrate', 'simulate')
+SUBCOMMANDS = ('info', 'bag', 'track', 'score', 'register', 'train', 'evaluate', 'calibrate', 'simulate',
+               'evaluate-recording', 'experiments')
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -18,7 +19,7 @@ def build_parser() -> argparse.ArgumentParser:
         description='Multi-drone multi-view pedestrian detection and tracking: offline tools.')
     sub = parser.add_subparsers(dest='command', metavar='COMMAND', required=True)
     for name in SUBCOMMANDS:
-        importlib.import_module(f'matrix_core.cli.{name}').add_parser(sub)
+        importlib.import_module(f'matrix_core.cli.{name.replace("-", "_")}').add_parser(sub)
     return parser
 
 

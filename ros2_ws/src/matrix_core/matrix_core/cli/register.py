@@ -8,7 +8,13 @@ null when status is 'failed'. ``summary.json`` adds the error of each pair again
 the stored calibrations (mean over visible ground points, full-resolution pixels).
 
 The reference of each drone is the folder's ``reference/`` image and calibration; without one, the
-first frame (with its stored calibration) is the reference.
+first frame (with its stored calibration) is the reference. Obstacles and the flat-ground extent come from
+the folder's ``matrix_tracker_meta.json`` when it states them (simulated folders, see
+``matrix_core.register.scene``); otherwise ``--exclude_boxes`` / ``--ground_margin_m`` apply.
+
+Overlay pictures ``DIR/registration/overlay/Drone{N}_{TTTT}.png`` (current image warped onto the reference,
+checkerboarded with it, reference ground grid): the first frame of each drone always, every frame with
+``--png``, every K-th frame with ``--png K``.
 """
 
 import json
@@ -23,7 +29,9 @@ from matrix_core.datasets import matrix_conventions as conv
 from matrix_core.register.backends import make_backend
 from matrix_core.register.evaluate import homography_error_px
 from matrix_core.register.file_frame import to_matrix_file_frame
+from matrix_core.register.overlay import write_registration_overlay
 from matrix_core.register.registrar import Registrar
+from matrix_core.register.scene import settings_for_dataset
 from matrix_core.register.settings import RegisterSettings
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
@@ -35,6 +43,9 @@ def add_parser(subparsers) -> None:
     p.add_argument('--out', required=True, help='output folder (gets a registration/ subfolder)')
     p.add_argument('--views', nargs='*', default=[], help='drones to register, e.g. D1 D3 (default: all)')
     p.add_argument('--max-frames', type=int, default=0, help='register at most this many frames (0 = all)')
+    p.add_argument('--png', type=int, nargs='?', const=1, default=0, metavar='K',
+                   help='overlay PNG of every K-th frame (bare --png: every frame); default: the first frame '
+                        'of each drone only')
     add_settings_arguments(p, RegisterSettings)
     p.set_defaults(func=run)
 
@@ -52,10 +63,12 @@ def _reference(dataset: MatrixDataset, view: str):
 
 
 def run(args) -> int:
-    settings = settings_from_namespace(RegisterSettings, args)
     dataset = open_dataset(args.dataset)
     if not isinstance(dataset, MatrixDataset):
         raise DatasetError(f'{args.dataset}: register needs a MATRIX folder (drones with per-frame calibration)')
+    settings, note = settings_for_dataset(settings_from_namespace(RegisterSettings, args), dataset)
+    if note:
+        print(note)
     views = list(args.views) or list(dataset.views)
     unknown = set(views) - set(dataset.views)
     if unknown:
@@ -69,8 +82,9 @@ def run(args) -> int:
         for view in views:
             image, ref_cam, ref_id = _reference(dataset, view)
             registrar = Registrar(settings, image, ref_cam, dataset.area, ref_id, backend)
-            for frame in frames:
-                result = registrar.register(dataset.load_image(view, frame), frame)
+            for index, frame in enumerate(frames):
+                current = dataset.load_image(view, frame)
+                result = registrar.register(current, frame)
                 record = result.to_dict()
                 if result.ok:
                     H_pix, H_ground = to_matrix_file_frame(result.H_cur_to_ref, result.H_img_to_ground)
@@ -82,6 +96,12 @@ def run(args) -> int:
                 summary.append({'view': view, 'frame': frame, 'status': result.status, 'error_px': error,
                                 'confidence': result.confidence, 'inliers': result.inliers,
                                 'seconds': result.seconds, 'message': result.message})
+                if index == 0 or (args.png and index % args.png == 0):
+                    title = (f'{view} frame {frame}: {result.status}, c {result.confidence:.2f}, {result.inliers} '
+                             f'inliers' + (f', {error:.2f} px vs calibration' if error is not None else
+                                           f' ({result.message})'))
+                    write_registration_overlay(out / 'overlay' / name.replace('.json', '.png'), current, image,
+                                               result.H_cur_to_ref, ref_cam, dataset.area, title)
                 bar.update()
     errors = np.array([s['error_px'] for s in summary if s['error_px'] is not None])
     failed = sum(s['status'] != 'ok' for s in summary)

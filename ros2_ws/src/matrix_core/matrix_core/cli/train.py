@@ -14,16 +14,29 @@ def add_parser(subparsers) -> None:
     p.add_argument('--epochs', type=int, help='override the number of epochs')
     p.add_argument('--max-steps-per-epoch', type=int, help='override max_steps_per_epoch (0: all)')
     p.add_argument('--seed', type=int, help='override the seed')
+    p.add_argument('--export', metavar='PATH', help='after training, write last.pt without the optimizer state '
+                   'to PATH (how the shipped checkpoints/*.pt are made; with --resume on a finished run it '
+                   'only exports)')
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    from matrix_core.bev.config import load_config
+    from pathlib import Path
+
+    from matrix_core.bev.config import CONFIG_DIR, load_config, resolve_config_path
     from matrix_core.bev.training import train
 
     overrides = {k: v for k, v in (('epochs', args.epochs), ('max_steps_per_epoch', args.max_steps_per_epoch),
                                    ('seed', args.seed)) if v is not None}
     config = load_config(args.config, overrides)
     history = train(config, args.out, resume=args.resume)
-    print(f'done: {len(history)} epochs, checkpoints in {args.out or config.out_dir}')
+    out = Path(args.out or config.out_dir)
+    print(f'done: {len(history)} epochs, checkpoints in {out}')
+    if args.export:
+        from matrix_core.bev.checkpoint import export_checkpoint
+
+        cfg = resolve_config_path(args.config)
+        path = export_checkpoint(out / 'last.pt', args.export,
+                                 trained_with=f'configs/{cfg.name}' if cfg.parent == CONFIG_DIR else str(cfg))
+        print(f'exported {path} ({path.stat().st_size / 1e6:.1f} MB)')
     return 0

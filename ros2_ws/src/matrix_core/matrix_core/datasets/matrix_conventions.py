@@ -98,6 +98,13 @@ def world_from_file(points_file) -> np.ndarray:
 world_to_file = world_from_file  # negating y is its own inverse
 
 
+def ground_homography_from_file(ground_H_img_file) -> np.ndarray:
+    """(3, 3) homography raw file image pixels -> file world ground (x, y) metres (as ``matrix-tracker
+    register`` writes ``H_img_to_ground``) -> internal image pixels -> internal world ground metres."""
+    file_pix_H_pix = np.array([[1.0, 0.0, PIXEL_OFFSET], [0.0, 1.0, PIXEL_OFFSET], [0.0, 0.0, 1.0]])
+    return M @ np.asarray(ground_H_img_file, dtype=np.float64) @ file_pix_H_pix
+
+
 def area_from_file(x_range, y_range) -> tuple:
     """File-frame area ((x0, x1), (y0, y1)) -> internal (x_min, y_min, x_max, y_max) metres."""
     (x0, x1), (y0, y1) = x_range, y_range

@@ -65,11 +65,18 @@ def ground_polygon(ref_img_H_ground: np.ndarray, ground_xy: np.ndarray) -> np.nd
     return cv2.convexHull(uv.astype(np.float32)).reshape(-1, 2).astype(np.float64)
 
 
+def shape_tolerance(max_shape_error: float, inliers, shape_inliers: int = 100) -> float:
+    """Largest shape error accepted for a fit with ``inliers`` inliers (None: ``max_shape_error``)."""
+    if inliers is None or inliers >= shape_inliers:
+        return max_shape_error
+    return max_shape_error * float(np.sqrt(shape_inliers / max(int(inliers), 1)))
+
+
 def check_registration(H_cur_to_ref: np.ndarray, K: np.ndarray, ref_img_H_ground: np.ndarray,
                        ref_center: np.ndarray, ref_polygon: np.ndarray, previous_center=None,
                        frames_since_previous: int = 1, max_shape_error: float = 0.08,
                        max_area_ratio: float = 2.5, max_height_change_m: float = 4.0,
-                       max_step_m: float = 3.0):
+                       max_step_m: float = 3.0, inliers: int = None, shape_inliers: int = 100):
     """Run the gate. Returns (reason, implied camera): reason is '' when every check passes.
 
     Args:
@@ -78,12 +85,14 @@ def check_registration(H_cur_to_ref: np.ndarray, K: np.ndarray, ref_img_H_ground
         ref_img_H_ground: (3, 3) ground metres -> reference pixels.
         ref_center: (3,) reference camera centre; ref_polygon: (P, 2) reference pixels (:func:`ground_polygon`).
         previous_center: (3,) implied centre of the previous registered frame, or None.
+        inliers: inliers of the fit (None: the shape tolerance is ``max_shape_error``, see :func:`shape_tolerance`).
     """
     img_H_ground = np.linalg.solve(H_cur_to_ref, ref_img_H_ground)
     cam = implied_camera(K, img_H_ground)
-    if cam.shape_error > max_shape_error:
+    tolerance = shape_tolerance(max_shape_error, inliers, shape_inliers)
+    if cam.shape_error > tolerance:
         return (f'gate: implied ground homography is not a rigid camera (shape error {cam.shape_error:.3f} '
-                f'> {max_shape_error})'), cam
+                f'> {tolerance:.3f} for {inliers} inliers)'), cam
     if cam.center[2] <= 0 or abs(cam.center[2] - ref_center[2]) > max_height_change_m:
         return (f'gate: implied camera height {cam.center[2]:.2f} m vs reference {ref_center[2]:.2f} m '
                 f'(max change {max_height_change_m} m)'), cam

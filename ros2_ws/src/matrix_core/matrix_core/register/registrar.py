@@ -1,5 +1,8 @@
 """Registration of one drone's frames to its reference: features -> symmetric matches -> robust homography
--> sanity gate -> result; with re-keying to a recent good frame when confidence stays low."""
+-> sanity gate -> result; with re-keying to a recent good frame when confidence stays low, and a way
+back: while re-keyed, the original reference is tried again every ``retry_reference_every`` frames and
+whenever the chained registration is weak, and takes over again when it registers well (chains
+accumulate error; the reference does not)."""
 
 import time
 from dataclasses import replace
@@ -45,6 +48,7 @@ class Registrar:
         self._previous_center = None
         self._frames_since_good = 1
         self._weak_streak = 0
+        self._frames_on_key = 0  # frames registered since the last re-keying
         self._last_good = None  # (frame_id, features, H_cur_to_ref)
 
     @property
@@ -68,7 +72,58 @@ class Registrar:
             return self._result(STATUS_FAILED, None, 0, 0, float('nan'), start,
                                 f'image is {w}x{h}, the reference is {cam.width}x{cam.height}')
         cur = self.backend.extract(image, s.max_features)
-        target, target_to_ref = self._target()
+        notes = []
+        result = None
+        if self.key is not None and self._retry_due():
+            result = self._back_to_reference(cur, start, notes)
+        if result is None:
+            result = self._attempt(cur, *self._target(), start)
+            if self.key is not None and s.retry_reference_every and self._weak(result) and not notes:
+                # The chained registration degrades: the original reference may be visible again.
+                result = self._back_to_reference(cur, start, notes) or result
+        if result.ok:
+            self._previous_center = result.implied_center
+        note = self._update_key(result, frame_id, cur)
+        notes += [note] if note else []
+        if notes:
+            message = '; '.join(([result.message] if result.message else []) + notes)
+            result = replace(result, message=message)
+        return replace(result, seconds=time.perf_counter() - start)
+
+    def reference_result(self) -> RegistrationResult:
+        """The result of the reference image itself (identity, exact by definition), for a caller that made
+        a live image the reference. It does not seed the gate's previous camera centre: the reference may be
+        from another time than the frames that follow."""
+        n = len(self.reference.features)
+        return self._result(STATUS_OK, np.eye(3), n, n, 0.0, time.perf_counter(), 'this image is the reference')
+
+    def _weak(self, result: RegistrationResult) -> bool:
+        return not result.ok or result.confidence < self.settings.rekey_confidence
+
+    def _retry_due(self) -> bool:
+        """While re-keyed: retry the original reference every ``retry_reference_every`` frames."""
+        every = self.settings.retry_reference_every
+        return bool(every) and self._frames_on_key > 0 and self._frames_on_key % every == 0
+
+    def _back_to_reference(self, cur: Features, start, notes: list):
+        """Register ``cur`` to the original reference; a good result ends the re-keying (returned), else
+        None (the key frame stays). Appends what happened to ``notes`` (diagnostics)."""
+        key_id = self.key.key_id
+        direct = self._attempt(cur, self.reference.features, np.eye(3), start, self.reference.reference_id)
+        if direct.ok and direct.confidence >= self.settings.good_confidence:
+            self.key = None
+            self._weak_streak = 0
+            notes.append(f'back on the reference (retried after {self._frames_on_key} frames on {key_id})')
+            return direct
+        why = direct.message if not direct.ok else f'confidence {direct.confidence:.2f}'
+        notes.append(f'reference retried, stays on {key_id} ({why})')
+        return None
+
+    def _attempt(self, cur: Features, target: Features, target_to_ref: np.ndarray, start,
+                 reference_id: str = None) -> RegistrationResult:
+        """Match ``cur`` to ``target`` (whose pixels map to the reference's by ``target_to_ref``), fit, gate."""
+        s = self.settings
+        cam = self.reference.camera
         pairs = match_symmetric(cur.desc, target.desc, s.ratio, s.matcher)
         cv2.setRNGSeed(s.seed)
         # Fit in reference pixels, so that the inlier threshold is in full-resolution reference pixels.
@@ -76,48 +131,44 @@ class Registrar:
             if len(pairs) else np.zeros((0, 2))
         fit = fit_homography(cur.xy[pairs[:, 0]], dst, s.estimator, s.ransac_threshold_px, s.ransac_iterations)
         matches, inliers = len(pairs), int(fit.inliers.sum())
+        args = (matches, inliers, fit.error_px, start)
         if fit.H is None:
-            result = self._result(STATUS_FAILED, None, matches, 0, float('nan'), start, fit.reason)
-        elif inliers < s.min_inliers:
-            result = self._result(STATUS_FAILED, None, matches, inliers, fit.error_px, start,
-                                  f'only {inliers} inliers (min_inliers {s.min_inliers})')
-        else:
-            reason, implied = check_registration(
-                fit.H, cam.K, cam.img_H_ground(), cam.center, self.reference.polygon, self._previous_center,
-                self._frames_since_good, s.gate_max_shape_error, s.gate_max_area_ratio,
-                s.gate_max_height_change_m, s.gate_max_step_m)
-            if reason:
-                result = self._result(STATUS_FAILED, None, matches, inliers, fit.error_px, start, reason)
-            else:
-                result = self._result(STATUS_OK, fit.H, matches, inliers, fit.error_px, start)
-                self._previous_center = implied.center
-        note = self._update_key(result, frame_id, cur)
-        if note:
-            result = replace(result, message=f'{result.message}; {note}' if result.message else note)
-        return result
+            return self._result(STATUS_FAILED, None, matches, 0, float('nan'), start, fit.reason, reference_id)
+        if inliers < s.min_inliers:
+            return self._result(STATUS_FAILED, None, *args, f'only {inliers} inliers (min_inliers {s.min_inliers})',
+                                reference_id)
+        reason, implied = check_registration(
+            fit.H, cam.K, cam.img_H_ground(), cam.center, self.reference.polygon, self._previous_center,
+            self._frames_since_good, s.gate_max_shape_error, s.gate_max_area_ratio,
+            s.gate_max_height_change_m, s.gate_max_step_m, inliers, s.gate_shape_inliers)
+        if reason:
+            return self._result(STATUS_FAILED, None, *args, reason, reference_id)
+        return self._result(STATUS_OK, fit.H, *args, '', reference_id, implied.center)
 
-    def _result(self, status, H, matches, inliers, error_px, start, message='') -> RegistrationResult:
+    def _result(self, status, H, matches, inliers, error_px, start, message='', reference_id=None,
+                implied_center=None) -> RegistrationResult:
         H_ground = None
         if H is not None:
             H_ground = self.reference.camera.ground_H_img() @ H
             H_ground = H_ground / H_ground[2, 2]
         return RegistrationResult(status, H, H_ground, inliers / matches if matches else 0.0, matches, inliers,
-                                  error_px, self.reference_id, self.backend.name,
-                                  time.perf_counter() - start, message)
+                                  error_px, reference_id or self.reference_id, self.backend.name,
+                                  time.perf_counter() - start, message, implied_center)
 
     def _update_key(self, result: RegistrationResult, frame_id, cur: Features) -> str:
         """Track good frames; after ``rekey_after`` weak frames in a row, chain through the last good one."""
         s = self.settings
         self._frames_since_good = 1 if result.ok else self._frames_since_good + 1
+        self._frames_on_key = self._frames_on_key + 1 if self.key is not None else 0
         if result.ok and result.confidence >= s.good_confidence:
             self._last_good = (frame_id, cur, result.H_cur_to_ref)
-        weak = not result.ok or result.confidence < s.rekey_confidence
-        self._weak_streak = self._weak_streak + 1 if weak else 0
+        self._weak_streak = self._weak_streak + 1 if self._weak(result) else 0
         if s.rekey_after and self._weak_streak >= s.rekey_after and self._last_good is not None:
             frame, features, H = self._last_good
             key_id = f'key:{frame}'
             if self.key is None or self.key.key_id != key_id:
                 self.key = self.reference.make_key(key_id, features, H)
                 self._weak_streak = 0
+                self._frames_on_key = 0
                 return f're-keyed: next frames register to frame {frame}, chained to the reference'
         return ''

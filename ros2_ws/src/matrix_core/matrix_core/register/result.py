@@ -26,7 +26,8 @@ class RegistrationResult:
         reference_id: the reference the homography is chained through (e.g. 'D1/reference' or
             'D1/reference<-key:17' after re-keying).
         backend: feature backend name; seconds: wall time of the registration.
-        message: why it failed, or what happened (re-keying); '' otherwise.
+        message: why it failed, or what happened (re-keying, retrying the reference); '' otherwise.
+        implied_center: (3,) world metres of the camera centre the ground homography implies (gate), or None.
     """
 
     status: str
@@ -40,6 +41,7 @@ class RegistrationResult:
     backend: str
     seconds: float
     message: str = ''
+    implied_center: np.ndarray = None
 
     @property
     def ok(self) -> bool:

@@ -34,9 +34,16 @@ class RegisterSettings:
     exclude_boxes: list[float] = field(default_factory=lambda: list(MATRIX_BLOCK), metadata={
         'help': 'obstacles to mask out, groups of 5 numbers: x0 y0 x1 y1 height (internal world metres); '
                 'default: the MATRIX central block'})
+    scene_from_dataset: bool = field(default=True, metadata={
+        'help': "take exclude_boxes and ground_margin_m from the dataset's matrix_tracker_meta.json when it "
+                'states them (simulated folders: block, pillars, flat ground up to the buildings); the real '
+                'MATRIX sample has none and keeps the configured values'})
     gate_max_shape_error: float = field(default=0.02, metadata={
         'help': 'sanity gate: largest deviation of the implied ground homography from a rigid camera '
-                '(column norm ratio and non-orthogonality of K^-1 H)'})
+                '(column norm ratio and non-orthogonality of K^-1 H) for a fit with gate_shape_inliers inliers'})
+    gate_shape_inliers: int = field(default=100, metadata={
+        'help': 'with fewer inliers n the shape tolerance grows as sqrt(gate_shape_inliers / n): the noise of '
+                'a homography fitted to n points falls as 1/sqrt(n)'})
     gate_max_area_ratio: float = field(default=4.0, metadata={
         'help': 'sanity gate: the ground area warped into the current image may shrink/grow by at most this '
                 'factor against the reference'})
@@ -48,6 +55,9 @@ class RegisterSettings:
         'help': 'confidence below which a frame counts as weak for re-keying'})
     rekey_after: int = field(default=3, metadata={
         'help': 're-key to the last well-registered frame after this many weak or failed frames in a row (0 = never)'})
+    retry_reference_every: int = field(default=10, metadata={
+        'help': 'while re-keyed, try the original reference again every this many frames, and at once when a '
+                'chained frame is weak; it takes over again when good (0 = never)'})
     good_confidence: float = field(default=0.25, metadata={
         'help': 'a frame with at least this confidence (and passing the gate) may become a key frame'})
     seed: int = field(default=0, metadata={'help': 'random seed of the robust estimator (reproducible results)'})
@@ -67,6 +77,8 @@ class RegisterSettings:
             raise ValueError(f'estimator must be ransac or magsac, got {self.estimator!r}')
         if len(self.exclude_boxes) % 5:
             raise ValueError(f'exclude_boxes needs groups of 5 numbers, got {len(self.exclude_boxes)}')
+        if self.gate_shape_inliers < 1 or self.retry_reference_every < 0:
+            raise ValueError('gate_shape_inliers must be >= 1 and retry_reference_every >= 0')
         for name in ('max_features', 'reference_max_features', 'min_inliers', 'ransac_iterations'):
             if getattr(self, name) < 4:
                 raise ValueError(f'{name} must be at least 4')

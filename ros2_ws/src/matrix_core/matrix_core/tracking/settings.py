@@ -16,6 +16,8 @@ class TrackerSettings:
     frame_interval_s: float = field(default=0.5, metadata={'help': 'time between frames (s); MATRIX is 2 fps'})
     accel_noise: float = field(default=2.0, metadata={'help': 'Kalman process noise: std of the acceleration (m/s^2)'})
     measurement_noise_m: float = field(default=0.3, metadata={'help': 'Kalman measurement noise: std of a detection position (m)'})
+    confirm_first_frame: bool = field(default=True, metadata={'help': 'tracks started in the first frame (after construction or reset()) get an id at once, as in ByteTrack: everyone present at the start would otherwise be missed for birth_hits - 1 frames'})
+    report_coasting: int = field(default=0, metadata={'help': 'also report confirmed tracks that missed up to this many frames in a row, at their Kalman prediction (0: only matched tracks)'})
     use_offsets: bool = field(default=True, metadata={'help': 'associate with the detections\' tracking offsets (CenterTrack) when present'})
 
     def __post_init__(self):
@@ -26,5 +28,7 @@ class TrackerSettings:
             raise ValueError(f'gate_growth_m must be >= 0, got {self.gate_growth_m}')
         if not 0 <= self.low_score <= self.high_score:
             raise ValueError(f'need 0 <= low_score <= high_score, got {self.low_score}, {self.high_score}')
+        if self.report_coasting < 0:
+            raise ValueError(f'report_coasting must be >= 0, got {self.report_coasting}')
         if self.birth_hits < 1 or self.max_misses < 0:
             raise ValueError(f'birth_hits must be >= 1 and max_misses >= 0, got {self.birth_hits}, {self.max_misses}')

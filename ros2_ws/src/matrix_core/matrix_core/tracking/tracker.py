@@ -3,7 +3,8 @@
 Per frame: predict every track (constant velocity), match confident detections to all tracks, then
 weak detections to the confirmed tracks left over, start tentative tracks from unmatched confident
 detections, give a track an id after ``birth_hits`` matched frames, delete it after ``max_misses``
-frames without a match. Ids are owned by the tracker instance and restart at 1 after ``reset()``.
+frames without a match (tracks of the very first frame are confirmed at once with
+``confirm_first_frame``). Ids are owned by the tracker instance and restart at 1 after ``reset()``.
 """
 
 from dataclasses import dataclass
@@ -18,12 +19,14 @@ from matrix_core.tracking.track import BevDetections, Track
 
 @dataclass(frozen=True)
 class TrackOutput:
-    """A confirmed track matched in the current frame: id, (2,) filtered position (m), (2,) velocity (m/s)."""
+    """A confirmed track matched in the current frame: id, (2,) filtered position (m), (2,) velocity (m/s);
+    ``misses`` > 0 only for a coasting track reported at its prediction (``report_coasting``)."""
 
     track_id: int
     xy: np.ndarray
     velocity: np.ndarray
     score: float
+    misses: int = 0
 
 
 class BevTracker:
@@ -39,9 +42,12 @@ class BevTracker:
         """Forget all tracks; the next confirmed track gets id 1."""
         self.tracks = []
         self._next_id = 1
+        self._first_frame = True
 
     def update(self, dets: BevDetections) -> list:
-        """Advance one frame. Returns the :class:`TrackOutput` of confirmed tracks matched in this frame."""
+        """Advance one frame. Returns the :class:`TrackOutput` of confirmed tracks matched in this frame
+        (plus, with ``report_coasting``, confirmed tracks missed for at most that many frames, at their
+        predicted position)."""
         s = self.settings
         for tr in self.tracks:
             tr.mean, tr.cov = self.kf.predict(tr.mean, tr.cov)
@@ -80,10 +86,11 @@ class BevTracker:
             if s.use_offsets and dets.offsets is not None:
                 velocity = -dets.offsets[j] / s.frame_interval_s
             tr = Track(*self.kf.initiate(dets.xy[j], velocity), float(dets.scores[j]))
-            if s.birth_hits <= 1:
+            if s.birth_hits <= 1 or (self._first_frame and s.confirm_first_frame):
                 tr.track_id, self._next_id = self._next_id, self._next_id + 1
                 hit.add(id(tr))
             survivors.append(tr)
         self.tracks = survivors
-        return [TrackOutput(tr.track_id, tr.xy.copy(), tr.velocity.copy(), tr.score)
-                for tr in self.tracks if tr.confirmed and id(tr) in hit]
+        self._first_frame = False
+        return [TrackOutput(tr.track_id, tr.xy.copy(), tr.velocity.copy(), tr.score, tr.misses)
+                for tr in self.tracks if tr.confirmed and (id(tr) in hit or tr.misses <= s.report_coasting)]

@@ -1,0 +1,58 @@
+"""``matrix-tracker evaluate-recording REC --ground-truth SEQUENCE_BAG``: score what the live graph recorded.
+
+REC is the ``recorder``'s bag folder (matrix_msgs/TrackArray tracks and detections, e.g. /tracks and
+/detections of the ``fuse`` node; its /bev_heatmap too, if recorded, fixes the grid) or its MOT text
+(``frame id x y``). SEQUENCE_BAG is the bag that was replayed (``/ground_truth/pedestrians``). Frames are
+``round((stamp - start) / period)``. Detection metrics are of the detections when recorded (else of the
+tracks); tracking metrics of the tracks. Prints the table of ``evaluate`` and lists frames without tracks.
+"""
+
+import json
+from pathlib import Path
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser('evaluate-recording', help='MODA/MOTA/IDF1... of a recorded live run vs a sequence bag',
+                              description=__doc__)
+    p.add_argument('recording', help='recorder bag folder or MOT text file "frame id x y"')
+    p.add_argument('--ground-truth', required=True, help='sequence bag with /ground_truth/pedestrians')
+    p.add_argument('--tracks-topic', default='/tracks', help='TrackArray topic of the tracks (default: /tracks)')
+    p.add_argument('--detections-topic', default='/detections', help='TrackArray topic of the detections '
+                   '(default: /detections)')
+    p.add_argument('--start-time', type=float, default=1.0, help='stamp of frame 0, seconds (default: 1.0)')
+    p.add_argument('--frame-period', type=float, default=0.5, help='seconds between frames (default: 0.5)')
+    p.add_argument('--area', type=float, nargs=4, metavar=('X0', 'Y0', 'X1', 'Y1'),
+                   help='ground truth outside is ignored (default: the recorded heatmap grid, else none)')
+    p.add_argument('--frames', type=int, nargs=2, metavar=('FIRST', 'LAST'), help='frame range (inclusive)')
+    p.add_argument('--threshold', type=float, default=0.5, help='detection match distance, m (default: 0.5)')
+    p.add_argument('--gate', type=float, default=1.0, help='tracking match distance, m (default: 1.0)')
+    p.add_argument('--json', help='also write the metrics to this JSON file')
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from matrix_core.fusion.recording import ground_truth_from_bag, read_recording, score_recording
+    from matrix_core.metrics.report import format_metrics
+
+    if args.frame_period <= 0:
+        raise ValueError('--frame-period must be positive')
+    timing = {'start_time': args.start_time, 'frame_period': args.frame_period}
+    recording = read_recording(args.recording, tracks_topic=args.tracks_topic,
+                               detections_topic=args.detections_topic, **timing) \
+        if Path(args.recording).is_dir() else read_recording(args.recording)
+    gt = ground_truth_from_bag(args.ground_truth, **timing)
+    result = score_recording(recording, gt, args.area, args.frames, args.threshold, args.gate)
+    gt_frames = sorted(set(result.gt.frames.tolist()))
+    lost = sorted(set(gt_frames) - set(recording.track_frames)) if recording.track_frames is not None else None
+    print(f'recording {args.recording}: detection metrics of the {result.detections_source}; '
+          f'{len(gt_frames)} ground-truth frames' + (f', grid area {tuple(round(v, 3) for v in recording.area)}'
+                                                     if recording.area and args.area is None else ''))
+    print(format_metrics(result.detection, result.tracking))
+    if lost is not None:
+        print(f'frames without a TrackArray: {lost if lost else "none"}')
+    if args.json:
+        Path(args.json).write_text(json.dumps({
+            'detection': result.detection.as_dict(),
+            'tracking': result.tracking.as_dict() if result.tracking else None,
+            'detections_source': result.detections_source, 'frames_without_tracks': lost}, indent=2))
+    return 0

@@ -1,0 +1,36 @@
+"""The machine and code a run used (for the settings table of RESULTS.md)."""
+
+import platform
+import subprocess
+from pathlib import Path
+
+
+def cpu_model() -> str:
+    try:
+        for line in Path('/proc/cpuinfo').read_text().splitlines():
+            if line.startswith('model name'):
+                return line.split(':', 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or 'unknown'
+
+
+def git_commit(repo: Path) -> str:
+    """``<hash>`` plus ``+local changes`` when the working tree differs from it (read-only git calls)."""
+    try:
+        head = subprocess.run(['git', '-C', str(repo), 'rev-parse', '--short=12', 'HEAD'], capture_output=True,
+                              text=True, check=True).stdout.strip()
+        dirty = subprocess.run(['git', '-C', str(repo), 'status', '--porcelain', '--untracked-files=no'],
+                               capture_output=True, text=True, check=True).stdout.strip()
+        return head + (' + local changes' if dirty else '')
+    except (OSError, subprocess.CalledProcessError):
+        return 'unknown'
+
+
+def machine_info(threads: int, repo: Path) -> dict:
+    import os
+
+    import torch
+
+    return {'cpu': cpu_model(), 'cpu_count': os.cpu_count(), 'threads': threads, 'torch': torch.__version__,
+            'python': platform.python_version(), 'platform': platform.platform(), 'git_commit': git_commit(repo)}

@@ -1,0 +1,77 @@
+"""PNG figures of RESULTS.md: grouped bar charts (like the paper's figures) and camera-dropout curves."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def bar_chart(path, metrics: list, series: dict, title: str, paper: dict = None) -> Path:
+    """Grouped bars: one group per metric, one bar per ``series`` entry (label -> values in percent, nan
+    = not measured); ``paper`` (label -> values) is drawn hatched beside ours."""
+    plt = _plt()
+    all_series = [(label, vals, False) for label, vals in series.items()]
+    all_series += [(f'paper: {label}', vals, True) for label, vals in (paper or {}).items()]
+    n = max(len(all_series), 1)
+    width = 0.8 / n
+    x = np.arange(len(metrics))
+    fig, ax = plt.subplots(figsize=(max(6.5, 1.4 * len(metrics) + 0.5 * n), 5.0), dpi=110)
+    for i, (label, vals, is_paper) in enumerate(all_series):
+        vals = np.array([np.nan if v is None else v for v in vals], float)
+        pos = x - 0.4 + width * (i + 0.5)
+        bars = ax.bar(pos, np.nan_to_num(vals), width, label=label, hatch='//' if is_paper else None,
+                      alpha=0.55 if is_paper else 0.9, edgecolor='black', linewidth=0.5)
+        for b, v in zip(bars, vals):
+            if is_paper and math.isnan(v):
+                continue            # the paper gives no number for this metric
+            ax.annotate('n/a' if math.isnan(v) else f'{v:.1f}', (b.get_x() + b.get_width() / 2, max(v, 0) if
+                        not math.isnan(v) else 0), ha='center', va='bottom', fontsize=7)
+    ax.axhline(0, color='black', linewidth=0.8)
+    ax.set_xticks(x, metrics)
+    ax.set_ylabel('%')
+    ax.set_title(title)
+    ax.legend(fontsize=7, loc='upper center', bbox_to_anchor=(0.5, -0.08), ncol=3, frameon=False)
+    ax.grid(axis='y', alpha=0.3)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def dropout_curves(path, curves: dict, metrics=('MODA', 'MODP', 'MOTA', 'MOTP'), paper_points: dict = None) -> Path:
+    """One panel per metric: value vs drop rate with +-1 std bars. ``curves``: label -> {rate: {metric:
+    (mean, std)}}; ``paper_points``: metric -> [(rate, value, label)] drawn as markers."""
+    plt = _plt()
+    fig, axes = plt.subplots(2, 2, figsize=(9, 7), dpi=110)
+    for ax, metric in zip(axes.ravel(), metrics):
+        for label, by_rate in curves.items():
+            rates = sorted(by_rate)
+            mean = [by_rate[r][metric][0] for r in rates]
+            std = [0.0 if math.isnan(by_rate[r][metric][1]) else by_rate[r][metric][1] for r in rates]
+            ax.errorbar(rates, mean, yerr=std, marker='o', capsize=3, label=label)
+        for rate, v, label in (paper_points or {}).get(metric, []):
+            ax.plot([rate], [v], marker='*', markersize=11, linestyle='none', color='black', alpha=0.6)
+            ax.annotate(label, (rate, v), textcoords='offset points', xytext=(5, 3), fontsize=7)
+        ax.set_title(metric)
+        ax.set_xlabel('share of views dropped')
+        ax.set_ylabel('%')
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle('Camera dropout at test time (mean +- std over random view subsets; stars: paper)')
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path

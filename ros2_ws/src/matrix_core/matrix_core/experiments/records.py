@@ -1,0 +1,60 @@
+"""Reading a run's results back: the ``metrics.json`` of every evaluation and ``run.json``, and the small
+aggregations the report needs (percent values, mean and standard deviation over seeds)."""
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+# Metric name -> how to read it (in percent) from a metrics.json record.
+METRICS = {
+    'MODA': lambda r: 100 * r['detection']['moda'],
+    'MODP': lambda r: 100 * r['detection']['modp'],
+    'precision': lambda r: 100 * r['detection']['precision'],
+    'recall': lambda r: 100 * r['detection']['recall'],
+    'MOTA': lambda r: 100 * r['tracking']['mota'],
+    'MOTP': lambda r: r['tracking']['motp_percent'],
+    'IDF1': lambda r: 100 * r['tracking']['idf1'],
+    'MT': lambda r: 100 * r['tracking']['mostly_tracked'] / max(r['tracking']['num_gt_ids'], 1),
+    'ML': lambda r: 100 * r['tracking']['mostly_lost'] / max(r['tracking']['num_gt_ids'], 1),
+}
+
+
+def load_records(run_dir) -> list:
+    """Every ``eval/*/metrics.json`` of a run, sorted by step folder name."""
+    return [json.loads(p.read_text()) for p in sorted(Path(run_dir).glob('eval/*/metrics.json'))]
+
+
+def load_run(run_dir) -> dict:
+    path = Path(run_dir) / 'run.json'
+    if not path.is_file():
+        raise FileNotFoundError(f'{path} is missing: run `matrix-tracker experiments` first')
+    return json.loads(path.read_text())
+
+
+def select(records: list, **criteria) -> list:
+    """Records whose fields equal every criterion (``dropped=[]`` selects runs with all views)."""
+    return [r for r in records if all(r.get(k) == v for k, v in criteria.items())]
+
+
+def one(records: list, **criteria):
+    """The single full-view record matching ``criteria``, or None."""
+    found = select(records, **{'dropped': [], **criteria})
+    return found[0] if found else None
+
+
+def value(record, metric: str) -> float:
+    """``metric`` of ``record`` in percent; nan when the record is missing or the metric undefined."""
+    if record is None:
+        return math.nan
+    v = METRICS[metric](record)
+    return math.nan if v is None else float(v)
+
+
+def mean_std(values) -> tuple:
+    """(mean, sample standard deviation) ignoring nan; std is nan for fewer than two values."""
+    v = np.asarray([x for x in values if not math.isnan(x)], float)
+    if not len(v):
+        return math.nan, math.nan
+    return float(v.mean()), float(v.std(ddof=1)) if len(v) > 1 else math.nan

@@ -1,0 +1,111 @@
+"""Runs a plan step by step in a run folder, skipping steps whose results are already there.
+
+A step writes into ``<run>/<name>/``; its params go to ``<run>/steps/<name>.started.json`` before and
+``.done.json`` (with the wall time) after. A step started with other params, or unfinished, is redone
+from an empty folder - except an unfinished training, which resumes from its ``last.pt``. A step that
+fails is logged (``<name>.error.txt``) and the steps that need it are skipped; the run goes on, and
+``run.json`` lists every step's state for the report.
+"""
+
+import dataclasses
+import json
+import shutil
+import time
+import traceback
+from pathlib import Path
+
+import torch
+
+from matrix_core.experiments.machine import machine_info
+from matrix_core.experiments.steps import EXECUTORS, StepUnavailable
+
+DONE, CACHED, UNAVAILABLE, FAILED, SKIPPED = 'done', 'cached', 'unavailable', 'failed', 'skipped'
+RUN_FILE = 'run.json'
+
+
+def _read_json(path: Path):
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def record_path(run_dir: Path, name: str, what: str) -> Path:
+    """Bookkeeping file of a step, outside its folder (a simulator or writer wants an empty folder):
+    ``<run>/steps/<name>.<what>`` with ``what`` in started.json, done.json, error.txt."""
+    return run_dir / 'steps' / f'{name}.{what}'
+
+
+def _prepare(step, run_dir: Path) -> bool:
+    """True when the step's folder already holds its finished result; else leave it ready to run."""
+    out, started, done = run_dir / step.name, record_path(run_dir, step.name, 'started.json'), \
+        record_path(run_dir, step.name, 'done.json')
+    previous = _read_json(started)
+    if previous == step.params and done.is_file():
+        return True
+    done.unlink(missing_ok=True)
+    record_path(run_dir, step.name, 'error.txt').unlink(missing_ok=True)
+    if out.exists() and (previous != step.params or step.kind != 'train'):
+        shutil.rmtree(out)
+    started.parent.mkdir(parents=True, exist_ok=True)
+    started.write_text(json.dumps(step.params, indent=2))
+    return False
+
+
+def run_step(step, run_dir: Path, progress: bool, log) -> dict:
+    out = run_dir / step.name
+    if _prepare(step, run_dir):
+        return {'state': CACHED, 'wall_s': _read_json(record_path(run_dir, step.name, 'done.json'))['wall_s']}
+    start = time.perf_counter()
+    try:
+        EXECUTORS[step.kind](step.params, out, run_dir, progress, log)
+    except StepUnavailable as exc:
+        log(f'{step.name}: not run: {exc}')
+        return {'state': UNAVAILABLE, 'reason': str(exc)}
+    except Exception as exc:  # one broken step must not end a run of hours; it is reported loudly
+        error = record_path(run_dir, step.name, 'error.txt')
+        error.write_text(traceback.format_exc())
+        log(f'{step.name}: FAILED: {type(exc).__name__}: {exc} (traceback in {error})')
+        return {'state': FAILED, 'reason': f'{type(exc).__name__}: {exc}'.splitlines()[0][:300]}
+    wall = time.perf_counter() - start
+    record_path(run_dir, step.name, 'done.json').write_text(json.dumps(
+        {'name': step.name, 'kind': step.kind, 'params': step.params, 'wall_s': wall}, indent=2))
+    return {'state': DONE, 'wall_s': wall}
+
+
+def run_plan(plan: list, size, run_dir, threads: int = 1, progress: bool = True, log=print, repo=None) -> dict:
+    """Run every step of ``plan`` (in order) under ``run_dir``; returns and writes ``run.json``."""
+    from tqdm import tqdm
+
+    run_dir = Path(run_dir)
+    run_dir.mkdir(parents=True, exist_ok=True)
+    torch.set_num_threads(threads)
+    started = time.time()
+    states = {}
+    bar = tqdm(plan, desc=f'experiments ({size.name})', unit='step', disable=not progress)
+    for step in bar:
+        bar.set_postfix_str(step.name)
+        blocked = [n for n in step.needs if states.get(n, {}).get('state') not in (DONE, CACHED)]
+        if blocked:
+            was = states.get(blocked[0], {}).get('state', 'not planned')
+            states[step.name] = {'state': SKIPPED, 'reason': f'needs {blocked[0]}, which was {was}'}
+            continue
+        states[step.name] = {'kind': step.kind, **run_step(step, run_dir, progress, log)}
+    summary = {'size': {**dataclasses.asdict(size), 'transfer_frames': size.transfer_frames},
+               'machine': machine_info(threads, Path(repo or Path.cwd())),
+               'started_utc': time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime(started)),
+               'wall_s': time.time() - started, 'steps': states}
+    (run_dir / RUN_FILE).write_text(json.dumps(summary, indent=2))
+    return summary
+
+
+def run_experiments(size, out_dir, report, images=None, threads: int = 1, progress: bool = True, log=print,
+                    repo=None) -> tuple:
+    """The whole thing: plan of ``size`` run in ``out_dir/<size.name>``, then the report. Returns
+    (run summary, report path)."""
+    from matrix_core.experiments.plan import build_plan
+    from matrix_core.experiments.report import write_report
+
+    run_dir = Path(out_dir) / size.name
+    summary = run_plan(build_plan(size), size, run_dir, threads, progress, log, repo)
+    return summary, write_report(run_dir, report, images)

@@ -1,0 +1,174 @@
+"""Fusing one synchronised multi-view frame: network inputs exactly as ``bev.data.BevFrames`` builds them
+(so live == offline), ``bev.inference.SequenceRunner`` (temporal features), then ``tracking.BevTracker``.
+"""
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+
+from matrix_core.bev.checkpoint import load_model
+from matrix_core.bev.data import prepare_image
+from matrix_core.bev.inference import SequenceRunner
+from matrix_core.bev.lifting import feat_H_grid
+from matrix_core.fusion.settings import FuseSettings
+from matrix_core.fusion.views import ViewInput, ViewInputError, check_image
+from matrix_core.tracking import BevDetections, BevTracker
+
+STRIDE = 4  # input pixels per feature pixel of the encoder (BevFrames.stride)
+
+
+@dataclass(frozen=True)
+class TrackState:
+    """A confirmed track reported this frame: id, (2,) metres, (2,) m/s, score, frames since birth, and
+    consecutive misses (> 0 only for a coasting track reported at its prediction)."""
+
+    track_id: int
+    xy: np.ndarray
+    velocity: np.ndarray
+    score: float
+    age: int
+    misses: int = 0
+
+
+@dataclass
+class ViewStatus:
+    """Whether a view took part in a frame; ``reason`` says why not; ``confidence`` of its homography."""
+
+    available: bool
+    reason: str = ''
+    confidence: float = None
+
+
+@dataclass
+class FuseResult:
+    """Output of one frame. ``heatmap``: (R, Q) sigmoid scores on ``BevFuser.grid`` (None when no view was
+    usable and the network did not run); ``timing``: seconds per stage; ``resets``: what was reset first."""
+
+    stamp: float
+    detections: BevDetections
+    tracks: list
+    heatmap: np.ndarray
+    views: dict
+    timing: dict
+    resets: list = field(default_factory=list)
+
+    @property
+    def available_views(self) -> list:
+        return [v for v, s in self.views.items() if s.available]
+
+
+class BevFuser:
+    """Stateful fusion of a stream of frames (call :meth:`process` in stamp order).
+
+    Args:
+        settings: :class:`FuseSettings`.
+        model, bev_settings: an already loaded model (tests); default: ``load_model(settings.checkpoint_path())``
+            with the decoding overrides of ``settings``.
+    """
+
+    def __init__(self, settings: FuseSettings, model=None, bev_settings=None):
+        self.settings = settings
+        torch.set_num_threads(settings.threads)
+        if model is None:
+            model, bev_settings = load_model(settings.checkpoint_path(), settings.decode_overrides())
+        self.model, self.bev_settings = model.to(settings.device).eval(), bev_settings
+        self.grid = bev_settings.grid(settings.area)
+        self.input_size = (bev_settings.image_width, bev_settings.image_height)
+        self.runner = SequenceRunner(self.model, bev_settings, self.grid)
+        self.tracker = BevTracker(settings.tracker_settings())
+        self.reset()
+
+    def reset(self) -> None:
+        """Start fresh: no temporal features, no tracks (ids restart at 1)."""
+        self.runner.reset()
+        self.tracker.reset()
+        self.last_stamp = None
+        self.frame_count = 0
+        self._born = {}  # track id -> frame count at birth
+
+    def _resets(self, stamp: float) -> list:
+        s = self.settings
+        if self.last_stamp is None:
+            return []
+        gap = stamp - self.last_stamp
+        if gap <= 0 or gap > s.tracker_reset_gap_s:
+            self.reset()
+            return ['temporal', 'tracker']
+        if gap > s.temporal_reset_gap_s:
+            self.runner.reset()
+            return ['temporal']
+        return []
+
+    def _view_tensors(self, view: ViewInput):
+        """(3, h, w) image and (3, 3) feat_H_grid of one usable view, as BevFrames builds them."""
+        image = check_image(view.image)
+        size = (image.shape[1], image.shape[0])
+        try:
+            fh = feat_H_grid(view.img_H_ground, self.grid.ground_H_grid, size, self.input_size, STRIDE)
+        except np.linalg.LinAlgError as exc:
+            raise ViewInputError(f'ground homography unusable: {exc}') from None
+        if not np.all(np.isfinite(fh)):
+            raise ViewInputError('ground homography gives a non-finite feature warp')
+        return prepare_image(image, self.input_size), fh
+
+    def process(self, stamp: float, views: dict) -> FuseResult:
+        """Fuse one frame. ``views``: view name -> :class:`ViewInput` (absent names count as missing).
+
+        A view is used when it has an image and a finite, non-singular homography; otherwise it is masked
+        out and its reason reported. With no usable view the network does not run (no invented detections);
+        the tracker still advances so that tracks age consistently.
+        """
+        t0 = time.perf_counter()
+        resets = self._resets(stamp)
+        names = self.settings.views
+        w, h = self.input_size
+        images = np.zeros((len(names), 3, h, w), np.float32)
+        # Missing views get an all-zero warp: no cell is "in front", so they contribute nothing (and no NaN).
+        fhs = np.zeros((len(names), 3, 3), np.float64)
+        mask = np.zeros(len(names), bool)
+        status = {}
+        for i, name in enumerate(names):
+            view = views.get(name)
+            if view is None:
+                status[name] = ViewStatus(False, 'no message')
+                continue
+            if not view.usable:
+                status[name] = ViewStatus(False, view.reason or 'image or homography missing', view.confidence)
+                continue
+            try:
+                images[i], fhs[i] = self._view_tensors(view)
+            except ViewInputError as exc:
+                status[name] = ViewStatus(False, str(exc), view.confidence)
+                continue
+            mask[i] = True
+            status[name] = ViewStatus(True, '', view.confidence)
+        t1 = time.perf_counter()
+        heatmap = None
+        if mask.any():
+            out = self.runner.step(self.frame_count, torch.from_numpy(images),
+                                   torch.from_numpy(fhs.astype(np.float32)), torch.from_numpy(mask))
+            dets, heatmap = out.detections, out.heatmap
+        else:
+            self.runner.reset()  # the next frame has no valid previous features
+            dets = BevDetections(np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)))
+            if 'temporal' not in resets:
+                resets.append('temporal')
+        t2 = time.perf_counter()
+        tracks = self._track(dets)
+        t3 = time.perf_counter()
+        self.last_stamp = stamp
+        self.frame_count += 1
+        timing = {'prepare_s': t1 - t0, 'network_s': t2 - t1, 'track_s': t3 - t2, 'total_s': t3 - t0}
+        return FuseResult(stamp, dets, tracks, heatmap, status, timing, resets)
+
+    def _track(self, dets: BevDetections) -> list:
+        out = []
+        for t in self.tracker.update(dets):
+            born = self._born.setdefault(t.track_id, self.frame_count)
+            out.append(TrackState(int(t.track_id), t.xy, t.velocity, float(t.score), self.frame_count - born,
+                                  int(getattr(t, 'misses', 0))))
+        alive = {tr.track_id for tr in self.tracker.tracks if tr.confirmed}
+        self._born = {k: v for k, v in self._born.items() if k in alive}
+        return out

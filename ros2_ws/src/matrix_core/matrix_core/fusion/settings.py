@@ -1,0 +1,83 @@
+"""Settings of live fusion (the ``fuse`` node's parameters): wiring, model, sync, resets, and the tracker's."""
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from matrix_core.tracking.settings import TrackerSettings
+
+INPUT_KINDS = ('homography', 'camera_info')
+IMAGE_KINDS = ('raw', 'compressed', 'both')
+
+
+def shipped_checkpoint() -> Path:
+    """The checkpoint shipped with the package (``matrix_core/bev/checkpoints/complex_quick.pt``)."""
+    return Path(__file__).resolve().parent.parent / 'bev' / 'checkpoints' / 'complex_quick.pt'
+
+
+@dataclass
+class FuseSettings(TrackerSettings):
+    """Everything the fusion of N views needs. Seconds, metres. ``frame_interval_s`` (from the tracker
+    settings) is the frame period of the streams."""
+
+    views: list[str] = field(default_factory=lambda: [f'D{i}' for i in range(1, 9)], metadata={
+        'help': 'drones to fuse, in the order the network sees them'})
+    image_kind: str = field(default='raw', metadata={
+        'help': 'raw (sensor_msgs/Image on image_topic), compressed (CompressedImage on compressed_topic) or both'})
+    image_topic: str = field(default='/{view}/image_raw', metadata={'help': 'raw image topic pattern'})
+    compressed_topic: str = field(default='/{view}/image/compressed', metadata={
+        'help': 'compressed image topic pattern'})
+    input_kind: str = field(default='homography', metadata={
+        'help': 'where each frame\'s ground homography comes from: homography (matrix_msgs/HomographyStamped, '
+                'h_img_to_ground, from register) or camera_info (CameraInfo p = K[R|t], from calib or the bag\'s '
+                'ground truth)'})
+    homography_topic: str = field(default='/{view}/homography', metadata={'help': 'HomographyStamped topic pattern'})
+    camera_info_topic: str = field(default='/{view}/camera_info', metadata={'help': 'CameraInfo topic pattern'})
+    min_confidence: float = field(default=0.0, metadata={
+        'help': 'homographies with a lower registration confidence are treated as missing'})
+    checkpoint: str = field(default='', metadata={
+        'help': 'BEV model checkpoint (.pt); empty: the shipped matrix_core/bev/checkpoints/complex_quick.pt'})
+    device: str = field(default='cpu', metadata={'help': 'torch device (the BEV runner decodes on the CPU)'})
+    threads: int = field(default=1, metadata={'help': 'torch CPU threads (1: one core, as benchmarked)'})
+    area: list[float] = field(default_factory=lambda: [0.0, -30.0, 30.0, 0.0], metadata={
+        'help': 'scene x_min y_min x_max y_max (m) when the checkpoint has no area; the grid adds its margin'})
+    score_threshold: float = field(default=-1.0, metadata={
+        'help': 'heatmap peak threshold; negative: the checkpoint\'s'})
+    nms_radius_m: float = field(default=-1.0, metadata={'help': 'NMS radius (m); negative: the checkpoint\'s'})
+    sync_timeout: float = field(default=1.0, metadata={
+        'help': 'seconds to wait for missing views after a frame\'s first message (a stopped drone never stalls)'})
+    temporal_reset_gap_s: float = field(default=0.75, metadata={
+        'help': 'forget the previous BEV features when frames are further apart than this (a lost frame)'})
+    tracker_reset_gap_s: float = field(default=5.0, metadata={
+        'help': 'reset the tracker (ids restart) when frames are further apart than this or time goes back'})
+
+    def __post_init__(self):
+        super().__post_init__()
+        if not self.views or len(set(self.views)) != len(self.views):
+            raise ValueError(f'views must name distinct drones, got {self.views}')
+        if self.image_kind not in IMAGE_KINDS:
+            raise ValueError(f'image_kind must be one of {IMAGE_KINDS}, got {self.image_kind!r}')
+        if self.input_kind not in INPUT_KINDS:
+            raise ValueError(f'input_kind must be one of {INPUT_KINDS}, got {self.input_kind!r}')
+        for name in ('image_topic', 'compressed_topic', 'homography_topic', 'camera_info_topic'):
+            if '{view}' not in getattr(self, name):
+                raise ValueError(f'{name} must contain {{view}}, got {getattr(self, name)!r}')
+        if len(self.area) != 4 or self.area[0] >= self.area[2] or self.area[1] >= self.area[3]:
+            raise ValueError(f'area must be x_min y_min x_max y_max, got {self.area}')
+        if self.sync_timeout < 0 or self.threads < 1 or self.temporal_reset_gap_s <= 0 or self.tracker_reset_gap_s <= 0:
+            raise ValueError('sync_timeout >= 0, threads >= 1 and the reset gaps > 0 are required')
+        if not self.device.startswith('cpu'):
+            raise ValueError(f'device {self.device!r}: only cpu is supported (SequenceRunner decodes on the CPU)')
+
+    def topic(self, pattern: str, view: str) -> str:
+        return pattern.format(view=view)
+
+    def checkpoint_path(self) -> Path:
+        return Path(self.checkpoint) if self.checkpoint else shipped_checkpoint()
+
+    def tracker_settings(self) -> TrackerSettings:
+        return TrackerSettings(**{name: getattr(self, name) for name in TrackerSettings.__dataclass_fields__})
+
+    def decode_overrides(self) -> dict:
+        """Decoding settings that replace the checkpoint's (only those set >= 0)."""
+        return {k: v for k, v in (('score_threshold', self.score_threshold), ('nms_radius_m', self.nms_radius_m))
+                if v >= 0}

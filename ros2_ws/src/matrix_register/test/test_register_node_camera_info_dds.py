@@ -1,0 +1,100 @@
+"""The real ``register`` node without a configured dataset takes its reference from a CameraInfo over DDS.
+
+This test process publishes real MATRIX images of one drone and the CameraInfo (``p = K [R | t]``) of its
+reference calibration: first an image that never gets a CameraInfo, then the reference image and only
+AFTER it its CameraInfo (same stamp; the node must pair them by stamp, not take whatever came first),
+then three frames. The homographies are checked against the ground truth from the stored calibrations.
+"""
+
+import subprocess
+import time
+
+import cv2
+import numpy as np
+import pytest
+import rclpy
+from matrix_msgs.msg import HomographyStamped
+from rclpy.node import Node
+from sensor_msgs.msg import CameraInfo, Image
+from std_msgs.msg import Header
+
+from matrix_core.datasets import MatrixDataset
+from matrix_core.register.evaluate import homography_error_px
+from matrix_core.register.settings import MATRIX_BLOCK
+from matrix_ros.conversions import camera_to_camera_info, image_to_msg, seconds_to_stamp, stamp_to_seconds
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+VIEW = 'D5'
+ORPHAN_S, REFERENCE_S = 0.5, 1.0          # stamps: an image without CameraInfo, the reference image
+FRAME_S = {2.0: 0, 2.5: 2, 3.0: 4}        # stamp -> frame of the sample
+
+
+def _spin_for(node, seconds, until=lambda: False, process=None):
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline and not until() and (process is None or process.poll() is None):
+        rclpy.spin_once(node, timeout_sec=0.05)
+
+
+def test_reference_from_camera_info_over_dds(matrix_sample, node_executable):
+    dataset = MatrixDataset(matrix_sample)
+    ref_cam = dataset.reference_camera(VIEW)
+    register = subprocess.Popen(
+        [str(node_executable('matrix_register', 'register')), '--ros-args', '-p', f'views:=[{VIEW}]'],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    rclpy.init()
+    got = {}
+    node = Node('register_camera_info_test')
+    try:
+        node.create_subscription(HomographyStamped, f'/{VIEW}/homography',
+                                 lambda m: got.__setitem__(stamp_to_seconds(m.header.stamp), m), 10)
+        image_pub = node.create_publisher(Image, f'/{VIEW}/image_raw', 10)
+        info_pub = node.create_publisher(CameraInfo, f'/{VIEW}/camera_info', 10)
+        _spin_for(node, 60.0, lambda: (image_pub.get_subscription_count() and info_pub.get_subscription_count()
+                                       and node.count_publishers(f'/{VIEW}/homography')), register)
+
+        def header(seconds):
+            return Header(stamp=seconds_to_stamp(seconds), frame_id=f'{VIEW}/camera_optical')
+
+        image_pub.publish(image_to_msg(dataset.load_image(VIEW, 1), header(ORPHAN_S)))
+        _spin_for(node, 1.0)
+        reference = cv2.imread(str(dataset.reference_image_path(VIEW)), cv2.IMREAD_COLOR)
+        image_pub.publish(image_to_msg(reference, header(REFERENCE_S)))
+        _spin_for(node, 1.0)  # the reference image is held until its CameraInfo comes
+        info_pub.publish(camera_to_camera_info(ref_cam, header(REFERENCE_S)))
+        for seconds, frame in FRAME_S.items():
+            image_pub.publish(image_to_msg(dataset.load_image(VIEW, frame), header(seconds)))
+            _spin_for(node, 0.3)
+        _spin_for(node, 60.0, lambda: len(got) >= 2 + len(FRAME_S), register)
+        alive = register.poll() is None
+    finally:
+        node.destroy_node()
+        rclpy.shutdown()
+        register.terminate()
+        try:
+            out, _ = register.communicate(timeout=20)
+        except subprocess.TimeoutExpired:
+            register.kill()
+            out, _ = register.communicate()
+    log = f'register said:\n{out}'
+    assert alive, log
+    assert sorted(got) == sorted([ORPHAN_S, REFERENCE_S, *FRAME_S]), f'homographies at {sorted(got)}; {log}'
+    # The image without a CameraInfo is reported failed, with zero matrices, never used as the reference.
+    orphan = got[ORPHAN_S]
+    assert orphan.status.startswith('failed:') and 'before the reference' in orphan.status, orphan.status
+    assert not any(orphan.h_cur_to_ref)
+    # The reference registers to itself.
+    ref_msg = got[REFERENCE_S]
+    assert ref_msg.status == 'ok', ref_msg.status
+    np.testing.assert_allclose(np.array(ref_msg.h_cur_to_ref).reshape(3, 3), np.eye(3), atol=2e-3)
+    for seconds, frame in FRAME_S.items():
+        msg = got[seconds]
+        assert msg.status == 'ok', f'frame {frame}: {msg.status}'
+        assert msg.reference_id == f'{VIEW}/frame/1.000000000'
+        H = np.array(msg.h_cur_to_ref).reshape(3, 3)
+        error = homography_error_px(H, dataset.camera(VIEW, frame), ref_cam, dataset.area, MATRIX_BLOCK)
+        assert error < 1.5, f'frame {frame}: {error:.2f} px from the ground truth'
+        # Ground homography = the CameraInfo's ground homography after H: lands pixels on the world.
+        H_ground = np.array(msg.h_img_to_ground).reshape(3, 3)
+        expected = ref_cam.ground_H_img() @ H
+        np.testing.assert_allclose(H_ground / H_ground[2, 2], expected / expected[2, 2], rtol=1e-6, atol=1e-9)

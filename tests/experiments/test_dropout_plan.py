@@ -1,0 +1,63 @@
+"""Camera-dropout subsets (seeded, exact rates) and the experiment plan built from them."""
+
+import pytest
+
+from matrix_core.experiments.dropout import dropout_subsets, dropped_count
+from matrix_core.experiments.plan import VIEWS, build_plan
+from matrix_core.experiments.sizes import QUICK, SIZES
+
+
+@pytest.mark.parametrize('rate, dropped', [(0.0, 0), (0.25, 2), (0.5, 4), (0.75, 6)])
+def test_subsets_drop_the_rate_of_the_views(rate, dropped):
+    subsets = dropout_subsets(VIEWS, rate, seeds=range(10))
+    assert len(subsets) == (1 if dropped == 0 else 10)
+    for s in subsets:
+        assert len(s.dropped) == dropped == dropped_count(rate, len(VIEWS))
+        assert len(s.kept) == len(VIEWS) - dropped
+        assert set(s.kept) | set(s.dropped) == set(VIEWS) and not set(s.kept) & set(s.dropped)
+        assert list(s.kept) == [v for v in VIEWS if v in s.kept]     # original order kept
+
+
+def test_subsets_are_seeded_and_random():
+    a = dropout_subsets(VIEWS, 0.5, seeds=range(20))
+    b = dropout_subsets(VIEWS, 0.5, seeds=range(20))
+    assert a == b
+    assert len({s.dropped for s in a}) > 10             # 70 possible subsets: seeds give different ones
+    counts = {v: sum(v in s.dropped for s in dropout_subsets(VIEWS, 0.25, seeds=range(400))) for v in VIEWS}
+    assert all(60 < c < 140 for c in counts.values()), counts   # each view dropped about 100 times of 400
+
+
+def test_bad_rate_is_an_error():
+    with pytest.raises(ValueError, match='drop rate'):
+        dropout_subsets(VIEWS, 1.0, [0])
+
+
+@pytest.mark.parametrize('name', sorted(SIZES))
+def test_plan_has_every_experiment_once_and_in_order(name):
+    size = SIZES[name]
+    plan = build_plan(size)
+    names = [s.name for s in plan]
+    assert len(names) == len(set(names))
+    position = {n: i for i, n in enumerate(names)}
+    for s in plan:
+        assert all(position[n] < position[s.name] for n in s.needs), s.name
+    evals = [s.params for s in plan if s.kind == 'evaluate']
+    # 4: one evaluation per (variant, rate > 0, seed) with exactly the rate's share of views dropped.
+    for variant in ('simple', 'complex'):
+        for rate in size.dropout_rates[1:]:
+            runs = [e for e in evals if e['test'] == variant and e['drop_rate'] == rate]
+            assert len(runs) == len(size.dropout_seeds)
+            assert all(len(e['dropped']) == dropped_count(rate, 8) == 8 - len(e['views']) for e in runs)
+    # 5: every training seed evaluated; 2: every calibration source on the main complex model.
+    assert {e['model'] for e in evals if e['test'] == 'complex' and not e['dropped']} >= \
+        {f'complex_s{s}' for s in size.seeds} | {'complex_static'}
+    assert {e['calibration'] for e in evals if e['model'] == f'complex_s{size.seeds[0]}'} == \
+        {'ground_truth', 'pnp', 'pnp_stale', 'registration', 'frozen_first', 'reference'}
+    # 3: transfer starts from the main complex model and uses the transfer share of the frames.
+    transfer = next(s.params for s in plan if s.name == 'train/modified_transfer')
+    assert transfer['init'] == f'train/complex_s{size.seeds[0]}'
+    assert transfer['frames'] == [0, size.transfer_frames - 1]
+
+
+def test_quick_transfer_uses_half_the_frames():
+    assert QUICK.transfer_frames == QUICK.train_frames // 2

@@ -1,0 +1,145 @@
+"""Live fusion core on a real simulated sequence: frame by frame it must give exactly what the offline
+evaluation (BevFrames + run_frames + BevTracker) gives on the same frames, and survive bad views."""
+
+import numpy as np
+import pytest
+import torch
+
+from matrix_core.bev.checkpoint import load_model
+from matrix_core.bev.data import BevFrames
+from matrix_core.bev.evaluation import evaluate
+from matrix_core.cli.main import main as cli
+from matrix_core.datasets import open_dataset
+from matrix_core.fusion.fuser import BevFuser
+from matrix_core.fusion.settings import FuseSettings, shipped_checkpoint
+from matrix_core.fusion.views import (ViewInput, ViewInputError, img_H_ground_from_projection,
+                                      img_H_ground_from_registration)
+
+torch.set_num_threads(1)
+FRAMES = 4
+
+
+@pytest.fixture(scope='module')
+def sequence(tmp_path_factory):
+    out = tmp_path_factory.mktemp('fusion') / 'sim'
+    assert cli(['simulate', '--config', 'complex', '--frames', str(FRAMES), '--seed', '11', '--fast',
+                '--image_ext', '.png', '--out', str(out)]) == 0
+    return out
+
+
+@pytest.fixture(scope='module')
+def model():
+    return load_model(shipped_checkpoint())
+
+
+def _offline(sequence, model, views=None):
+    net, bev = model
+    data = BevFrames(sequence, bev, calibration='ground_truth', views=views, cache_images=False)
+    return evaluate(net, data, FuseSettings().tracker_settings(), progress=False)
+
+
+def _live(sequence, model, make_view, settings=None):
+    net, bev = model
+    dataset = open_dataset(sequence)
+    fuser = BevFuser(settings or FuseSettings(area=list(dataset.area)), net, bev)
+    results = []
+    for k, frame in enumerate(dataset.frames):
+        views = {v: make_view(dataset, v, frame) for v in dataset.views}
+        results.append(fuser.process(1.0 + 0.5 * k, {v: x for v, x in views.items() if x is not None}))
+    return results
+
+
+def _from_camera_info(dataset, view, frame):
+    return ViewInput(dataset.load_image(view, frame), img_H_ground_from_projection(dataset.camera(view, frame).P))
+
+
+def _by_position(xy):
+    return np.lexsort((np.round(xy[:, 1], 2), np.round(xy[:, 0], 2)))
+
+
+def _assert_same(offline, live, atol):
+    for k, r in enumerate(live):
+        frame = offline.outputs[k].frame
+        off = offline.outputs[k].detections
+        # peaks of equal score may come in either order: compare them sorted by position
+        a, b = _by_position(r.detections.xy), _by_position(off.xy)
+        np.testing.assert_allclose(r.detections.xy[a], off.xy[b], atol=atol)
+        np.testing.assert_allclose(r.detections.scores[a], off.scores[b], atol=atol)
+        np.testing.assert_allclose(r.heatmap, offline.outputs[k].heatmap, atol=atol)
+        sel = offline.tracks.frames == frame
+        assert [t.track_id for t in r.tracks] == list(offline.tracks.ids[sel])
+        np.testing.assert_allclose(np.reshape([t.xy for t in r.tracks], (-1, 2)), offline.tracks.xy[sel], atol=atol)
+
+
+def test_camera_info_input_equals_offline(sequence, model):
+    offline = _offline(sequence, model)
+    live = _live(sequence, model, _from_camera_info)
+    assert sum(len(r.detections) for r in live) > 10 * FRAMES   # a crowd of 40 is detected
+    assert any(r.tracks for r in live)
+    _assert_same(offline, live, 1e-5)
+    assert all(r.available_views == [f'D{i}' for i in range(1, 9)] for r in live)
+    assert live[-1].tracks[0].age >= 1 and set(live[0].timing) >= {'prepare_s', 'network_s', 'total_s'}
+
+
+def test_registration_input_equals_offline(sequence, model):
+    """A HomographyStamped's h_img_to_ground (pixels -> ground, normalised [2][2] = 1) gives the same result."""
+    def from_registration(dataset, view, frame):
+        H = np.linalg.inv(dataset.camera(view, frame).img_H_ground())
+        return ViewInput(dataset.load_image(view, frame), img_H_ground_from_registration((H / H[2, 2]).ravel()),
+                         confidence=0.9)
+
+    _assert_same(_offline(sequence, model), _live(sequence, model, from_registration), 1e-4)
+
+
+def test_missing_views_equal_offline_drop(sequence, model):
+    """Views that never arrive are masked exactly like `evaluate --drop-views D2 D6`."""
+    keep = ['D1', 'D3', 'D4', 'D5', 'D7', 'D8']
+    offline = _offline(sequence, model, views=keep)
+    live = _live(sequence, model, lambda d, v, f: _from_camera_info(d, v, f) if v in keep else None)
+    _assert_same(offline, live, 1e-5)
+    assert live[0].views['D2'].reason == 'no message' and live[0].available_views == keep
+
+
+def test_bad_views_are_reported_not_used(sequence, model):
+    net, bev = model
+    dataset = open_dataset(sequence)
+    frame = dataset.frames[0]
+    fuser = BevFuser(FuseSettings(area=list(dataset.area)), net, bev)
+    views = {v: _from_camera_info(dataset, v, frame) for v in dataset.views}
+    views['D1'] = ViewInput(np.zeros((0, 5, 3), np.uint8), views['D1'].img_H_ground)
+    views['D2'] = ViewInput(views['D2'].image, np.full((3, 3), np.nan))
+    views['D3'] = ViewInput(None, None, 'corrupt compressed image')
+    r = fuser.process(1.0, views)
+    assert r.views['D3'].reason == 'corrupt compressed image'
+    assert 'image' in r.views['D1'].reason and 'homography' in r.views['D2'].reason
+    assert r.available_views == ['D4', 'D5', 'D6', 'D7', 'D8'] and len(r.detections) > 0
+    with pytest.raises(ViewInputError, match='NaN'):
+        img_H_ground_from_registration([np.nan] * 9)
+    with pytest.raises(ViewInputError, match='singular'):
+        img_H_ground_from_registration([0.0] * 9)
+    # no usable view: no network run, no invented detections, the stream goes on
+    empty = fuser.process(1.5, {})
+    assert empty.heatmap is None and len(empty.detections) == 0 and 'temporal' in empty.resets
+
+
+def test_gaps_reset_state(sequence, model):
+    net, bev = model
+    dataset = open_dataset(sequence)
+    fuser = BevFuser(FuseSettings(area=list(dataset.area)), net, bev)
+    views = {v: _from_camera_info(dataset, v, dataset.frames[0]) for v in dataset.views}
+    assert fuser.process(1.0, views).resets == []
+    assert fuser.process(1.5, views).resets == []
+    assert fuser.process(2.5, views).resets == ['temporal']            # one frame lost
+    assert fuser.process(20.0, views).resets == ['temporal', 'tracker']  # a new sequence
+    assert fuser.process(3.0, views).resets == ['temporal', 'tracker']   # time went back (bag restarted)
+
+
+def test_settings_validate():
+    with pytest.raises(ValueError, match='input_kind'):
+        FuseSettings(input_kind='pose')
+    with pytest.raises(ValueError, match='{view}'):
+        FuseSettings(image_topic='/image_raw')
+    with pytest.raises(ValueError, match='cpu'):
+        FuseSettings(device='cuda')
+    s = FuseSettings(gate_m=2.0, score_threshold=0.4)
+    assert s.tracker_settings().gate_m == 2.0 and s.decode_overrides() == {'score_threshold': 0.4}

@@ -1,0 +1,162 @@
+"""Fault tests of the `fuse` node (its own process, over DDS; this test publishes the drones' streams):
+a corrupt image and a NaN homography are logged and only that view is dropped, a stopped drone makes the
+frame go out after the sync timeout with 7 views while tracking continues, and a restarted node resumes."""
+
+import subprocess
+import time
+
+import numpy as np
+import pytest
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray
+from matrix_msgs.msg import HomographyStamped, TrackArray
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from sensor_msgs.msg import CompressedImage, Image
+from std_msgs.msg import Header
+
+from matrix_core.cli.main import main as cli
+from matrix_core.datasets import open_dataset
+from matrix_ros.conversions import image_to_compressed, image_to_msg, seconds_to_stamp, stamp_to_seconds
+from matrix_ros.qos import qos_by_name
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+
+class Drones:
+    """Publishes /Dn/image/compressed (small messages: no DDS retransmission stalls), /Dn/image_raw (only a
+    badly encoded image) and /Dn/homography (ground-truth homographies); collects the fuse output."""
+
+    def __init__(self, dataset):
+        self.dataset, self.views = dataset, list(dataset.views)
+        self.context = Context()
+        rclpy.init(context=self.context)
+        self.node = rclpy.create_node('fake_drones', context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        qos = qos_by_name('reliable')
+        self.images = {v: self.node.create_publisher(CompressedImage, f'/{v}/image/compressed', qos)
+                       for v in self.views}
+        self.raw = {v: self.node.create_publisher(Image, f'/{v}/image_raw', qos) for v in self.views}
+        self.homs = {v: self.node.create_publisher(HomographyStamped, f'/{v}/homography', 10) for v in self.views}
+        self.tracks, self.diags = {}, {}
+        self.node.create_subscription(TrackArray, '/tracks', self._on_tracks, 50)
+        self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 50)
+
+    def _on_tracks(self, msg):
+        self.tracks[round(stamp_to_seconds(msg.header.stamp), 3)] = msg
+
+    def _on_diag(self, msg):
+        by_name = {s.name: s for s in msg.status}
+        if 'fuse' in by_name:
+            self.diags[round(stamp_to_seconds(msg.header.stamp), 3)] = by_name
+
+    def spin_until(self, condition, timeout):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and not condition():
+            self.executor.spin_once(timeout_sec=0.05)
+        return condition()
+
+    def wait_for_fuse(self, timeout=60.0, count=1):
+        """Until every image and homography topic has ``count`` subscribers (0: the old node is gone)."""
+        pubs = [*self.images.values(), *self.raw.values(), *self.homs.values()]
+        matched = self.spin_until(lambda: all(p.get_subscription_count() == count for p in pubs), timeout)
+        self.spin_until(lambda: False, 1.0)   # the subscriber's side of the match completes a moment later
+        return matched
+
+    def publish(self, k: int, skip=(), corrupt_image=(), bad_encoding=(), nan_homography=()):
+        """Frame k (stamp 1 + 0.5 k); returns the stamp once its TrackArray arrived (30 s at most)."""
+        stamp, frame = 1.0 + 0.5 * k, self.dataset.frames[k]
+        self.tracks.pop(round(stamp, 3), None)   # a replayed stamp must be answered anew
+        self.diags.pop(round(stamp, 3), None)
+        header = Header(stamp=seconds_to_stamp(stamp), frame_id='world')
+        for v in self.views:
+            if v in skip:
+                continue
+            image = self.dataset.load_image(v, frame)
+            if v in bad_encoding:
+                raw = image_to_msg(image[:8, :8], header)
+                raw.encoding = 'yuv422_weird'
+                self.raw[v].publish(raw)
+            else:
+                img = image_to_compressed(image, header)
+                if v in corrupt_image:
+                    img.data = b'not a jpeg at all'
+                self.images[v].publish(img)
+            H = np.linalg.inv(self.dataset.camera(v, frame).img_H_ground())
+            hom = HomographyStamped(header=header, status='ok', confidence=0.9)
+            hom.h_img_to_ground = (np.full(9, np.nan) if v in nan_homography else (H / H[2, 2]).ravel()).tolist()
+            self.homs[v].publish(hom)
+        assert self.spin_until(lambda: round(stamp, 3) in self.tracks and round(stamp, 3) in self.diags, 30.0), stamp
+        return round(stamp, 3)
+
+    def close(self):
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.context)
+
+
+def _fuse(node_executable):
+    return subprocess.Popen([str(node_executable('matrix_bev_tracker', 'fuse')), '--ros-args', '-p',
+                             'sync_timeout:=2.0', '-p', 'image_kind:=both', '-p', 'tracker_reset_gap_s:=2.0'],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+
+def _stop(proc) -> str:
+    proc.terminate()
+    try:
+        return proc.communicate(timeout=20)[0]
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        return proc.communicate()[0]
+
+
+def test_faults_and_restart(node_executable, tmp_path):
+    assert cli(['simulate', '--config', 'complex', '--frames', '7', '--seed', '9', '--fast', '--image_ext', '.jpg',
+                '--out', str(tmp_path / 'sim')]) == 0
+    drones = Drones(open_dataset(tmp_path / 'sim'))
+    fuse = _fuse(node_executable)
+    try:
+        assert drones.wait_for_fuse(), 'fuse node did not subscribe'
+        ok = [drones.publish(k) for k in (0, 1)]
+        bad = drones.publish(2, corrupt_image=['D3'], bad_encoding=['D5'], nan_homography=['D4'])
+        stopped = [drones.publish(k, skip=['D8']) for k in (3, 4)]
+        assert fuse.poll() is None, 'fuse node died'
+        log = _stop(fuse)
+        assert fuse.returncode == 0 and 'published 5 frames' in log, log
+        assert drones.wait_for_fuse(count=0), 'the stopped fuse node is still subscribed'
+        fuse = _fuse(node_executable)   # restart mid-run: it resumes with the next frames
+        assert drones.wait_for_fuse(), 'restarted fuse node did not subscribe'
+        resumed = [drones.publish(k) for k in (5, 6)]
+        n_resumed = len(drones.tracks[resumed[1]].tracks)
+        replayed = drones.publish(0)    # the replay starts over: time goes back 2.5 s
+        log2 = _stop(fuse)
+    finally:
+        if fuse.poll() is None:
+            _stop(fuse)
+        drones.close()
+
+    def used(stamp):
+        return int(next(kv.value for kv in drones.diags[stamp]['fuse'].values if kv.key == 'views_used'))
+
+    def reason(stamp, view):
+        return drones.diags[stamp][f'fuse/{view}'].message
+
+    assert [used(s) for s in ok] == [8, 8] and len(drones.tracks[ok[1]].tracks) > 10
+    # bad input: logged, only that view is missing, the node keeps going
+    assert used(bad) == 5 and 'corrupt' in reason(bad, 'D3') and 'NaN' in reason(bad, 'D4')
+    assert 'encoding' in reason(bad, 'D5')
+    assert 'D3: not used for this frame: corrupt compressed image' in log
+    assert "D5: not used for this frame: unsupported image encoding 'yuv422_weird'" in log
+    assert 'D4: not used for this frame: h_img_to_ground has NaN' in log
+    # a stopped drone: frames go out after the sync timeout with 7 views; tracks continue
+    for s in stopped:
+        assert used(s) == 7 and reason(s, 'D8') == 'missing: no image and no homography'
+        assert len(drones.tracks[s].tracks) > 10
+    sync = {s: next(kv.value for kv in drones.diags[s]['fuse'].values if kv.key == 'sync') for s in stopped}
+    assert set(sync.values()) == {'timeout'}, sync
+    # restart: the new process fuses the next frames (ids restart; tracks are born after birth_hits frames)
+    assert [used(s) for s in resumed] == [8, 8] and n_resumed > 10
+    # time going back = a new sequence: fused from scratch (ids restart, every track new), not refused as late
+    assert used(replayed) == 8 and 'time went back, starting fresh' in log2 and 'published 3 frames' in log2
+    fresh = drones.tracks[replayed].tracks
+    assert all(t.age == 0 for t in fresh) and (not fresh or min(t.id for t in fresh) == 1), log2
