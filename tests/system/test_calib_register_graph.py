@@ -34,7 +34,8 @@ def test_graph_scores(matrix_sample, node_executable, tmp_path):
     player = start('matrix_ros', 'bag_player', f'bag:={bag}', 'wait_for_subscribers:=2',
                    'topics:=[/D1/image/compressed,/D5/image/compressed,/D1/ground_truth/camera_info,'
                    '/D5/ground_truth/camera_info]',
-                   'lockstep:=true', 'lockstep_topic:=/graph_monitor/frame_done', 'lockstep_type:=std_msgs/msg/Header')
+                   'lockstep:=true', 'lockstep_topic:=/graph_monitor/frame_done', 'lockstep_type:=std_msgs/msg/Header',
+                   'lockstep_timeout:=120.0')   # slow on a loaded 2-core machine (1080p board search)
     try:
         monitor_out = monitor.communicate(timeout=400)[0]
         player_out = player.communicate(timeout=30)[0]
