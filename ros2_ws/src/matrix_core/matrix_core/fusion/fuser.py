@@ -168,7 +168,7 @@ class BevFuser:
         for t in self.tracker.update(dets):
             born = self._born.setdefault(t.track_id, self.frame_count)
             out.append(TrackState(int(t.track_id), t.xy, t.velocity, float(t.score), self.frame_count - born,
-                                  int(getattr(t, 'misses', 0))))
+                                  int(t.misses)))
         alive = {tr.track_id for tr in self.tracker.tracks if tr.confirmed}
         self._born = {k: v for k, v in self._born.items() if k in alive}
         return out
