@@ -41,12 +41,7 @@ def bar_chart(path, metrics: list, series: dict, title: str, paper: dict = None)
     ax.set_title(title)
     ax.legend(fontsize=7, loc='upper center', bbox_to_anchor=(0.5, -0.08), ncol=3, frameon=False)
     ax.grid(axis='y', alpha=0.3)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
 
 
 def dropout_curves(path, curves: dict, metrics=('MODA', 'MODP', 'MOTA', 'MOTP'), paper_points: dict = None) -> Path:
@@ -69,6 +64,11 @@ def dropout_curves(path, curves: dict, metrics=('MODA', 'MODP', 'MOTA', 'MOTP'),
         ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=8)
     fig.suptitle('Camera dropout at test time (mean +- std over random view subsets; stars: paper)')
+    return _save(plt, fig, path)
+
+
+def _save(plt, fig, path) -> Path:
+    """Lay out, write (creating the folder) and close a figure; returns the path."""
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
