@@ -2,6 +2,8 @@
 SHELL := /bin/bash
 .DEFAULT_GOAL := help
 IN_ENV := source scripts/env.sh &&
+# Where the experiments write their report (its PNGs go to images/results/ beside it); CI writes elsewhere.
+RESULTS ?= docs/RESULTS.md
 
 .PHONY: help setup build test demo bench clean experiments experiments-quick
 
@@ -11,8 +13,8 @@ help:
 	@echo "make demo   - replay the real MATRIX sample through ROS 2 and write pictures to out/demo"
 	@echo "make bench  - print the speed figures of every component (scripts/bench_*.py)"
 	@echo "make build  - colcon build only"
-	@echo "make experiments       - the paper's experiments at full size (hours) -> docs/RESULTS.md + PNGs"
-	@echo "make experiments-quick - the same as a smoke test (a few minutes; numbers meaningless)"
+	@echo "make experiments       - the paper's experiments at full size (hours) -> \$$RESULTS (docs/RESULTS.md) + PNGs"
+	@echo "make experiments-quick - the same as a smoke test (a few minutes; numbers meaningless), e.g. RESULTS=out/quick/RESULTS.md"
 
 setup:
 	bash scripts/setup.sh
@@ -30,10 +32,10 @@ bench: setup
 	$(IN_ENV) for b in scripts/bench_*.py; do echo "== $$b"; python "$$b" || exit 1; done
 
 experiments: setup
-	$(IN_ENV) matrix-tracker experiments --mode full --out out/experiments --report docs/RESULTS.md
+	$(IN_ENV) matrix-tracker experiments --mode full --out out/experiments --report $(RESULTS)
 
 experiments-quick: setup
-	$(IN_ENV) matrix-tracker experiments --mode quick --out out/experiments --report docs/RESULTS.md
+	$(IN_ENV) matrix-tracker experiments --mode quick --out out/experiments --report $(RESULTS)
 
 clean:
 	rm -rf ros2_ws/build ros2_ws/install ros2_ws/log out .pytest_cache

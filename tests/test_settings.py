@@ -38,3 +38,20 @@ def test_defaults_and_overrides():
 def test_validation_runs():
     with pytest.raises(ValueError, match='positive'):
         parse('--rate', '-1')
+
+
+def test_launch_argument_strings_round_trip():
+    """Launch arguments are strings: defaults written by setting_to_string parse back to the defaults."""
+    from matrix_core.settings import setting_to_string, settings_from_strings
+
+    texts = {name: setting_to_string(default) for name, _, default, _ in settings_fields(Example)}
+    assert texts == {'rate': '2.0', 'name': 'x', 'enabled': 'true', 'views': ''}
+    assert settings_from_strings(Example, texts) == Example()
+    for views in ('D1,D3', '[D1, D3]', "['D1','D3']"):
+        assert settings_from_strings(Example, {'views': views}).views == ['D1', 'D3']
+    s = settings_from_strings(Example, {'rate': '0.5', 'enabled': 'False'})
+    assert (s.rate, s.enabled, s.name) == (0.5, False, 'x')
+    with pytest.raises(ValueError, match='Example.enabled'):
+        settings_from_strings(Example, {'enabled': 'maybe'})
+    with pytest.raises(ValueError, match='positive'):
+        settings_from_strings(Example, {'rate': '-1'})

@@ -161,3 +161,18 @@ def test_acceptance_real_sample_all_drones(dataset, scene):
     assert len(rot) >= 30, f'only {len(rot)} of 40 images calibrated'  # 31 measured
     assert np.median(rot) <= 0.1 and np.median(centre) <= 0.03
     assert max(rot) <= 0.5 and max(centre) <= 0.3
+
+
+def test_results_do_not_depend_on_other_drones_in_the_process(dataset, scene):
+    """OpenCV's RNG is seeded per image: D4 alone and D4 interleaved with D1 (one process hosting both, as
+    the calib node does) give identical poses."""
+    def calibrator(view):
+        return DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view),
+                               cv2.imread(str(dataset.reference_image_path(view))))
+    alone, shared, other = calibrator('D4'), calibrator('D4'), calibrator('D1')
+    for frame in (1, 2):
+        a = alone.process(dataset.load_image('D4', frame), frame)
+        other.process(dataset.load_image('D1', frame), frame)
+        b = shared.process(dataset.load_image('D4', frame), frame)
+        assert a.status == b.status == OK
+        np.testing.assert_array_equal(a.camera.cam_T_world, b.camera.cam_T_world)

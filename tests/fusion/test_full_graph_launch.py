@@ -1,58 +1,165 @@
-"""The full-graph launch file cannot run here (no `launch` package in the pip environment): check that it
-parses, that every node it starts is an installed executable, and that its launch arguments are declared
-with descriptions and used consistently."""
+"""The live graph as data (matrix_bringup.graph) and the launch file built on it.
 
-import ast
+`ros2 launch` cannot run here (no `launch` package in the pip environment), so the launch file is
+executed against a minimal stand-in of the `launch` / `launch_ros` API it uses (recording what it is
+given) and must produce exactly the processes of `graph_nodes`, which `run_graph` starts for real
+(tests/system/test_run_graph.py)."""
+
+import importlib.util
+import sys
+import types
 from pathlib import Path
 
 import pytest
+import yaml
+
+from matrix_bringup.graph import BagFacts, GraphSettings, NodeSpec, graph_nodes
+from matrix_core.settings import settings_fields
 
 LAUNCH = Path(__file__).resolve().parents[2] / 'ros2_ws/src/matrix_bringup/launch/full_graph.launch.py'
+FACTS = BagFacts(compressed=True, frames=5, has_ground_truth=True)
+VIEWS = [f'D{i}' for i in range(1, 9)]
 
 
-def _calls(tree, name):
-    return [n for n in ast.walk(tree) if isinstance(n, ast.Call) and getattr(n.func, 'id', None) == name]
+@pytest.fixture
+def settings(matrix_sample):
+    """GraphSettings for the real sample (its bag's facts are given, no bag is read)."""
+    return lambda **kw: GraphSettings(bag='/data/bag', dataset=str(matrix_sample), **kw)
 
 
-def _kw(call, key):
-    for k in call.keywords:
-        if k.arg == key and isinstance(k.value, ast.Constant):
-            return k.value.value
-    return None
+def test_per_drone_graph_has_one_calib_and_register_per_drone(settings):
+    nodes = graph_nodes(settings(record='/out/rec'), FACTS)
+    labels = [n.label for n in nodes]
+    assert labels == [f'{v}/{exe}' for v in VIEWS for exe in ('calib', 'register')] + ['fuse', 'recorder',
+                                                                                         'bag_player']
+    calib = nodes[0]
+    assert calib.parameters['views'] == ['D1'] and calib.parameters['compressed'] is True
+    assert calib.parameters['config'].endswith('matrix_sample.yaml')   # not a simulated folder
+    assert all(n.parameters.get('use_sim_time') for n in nodes if n.executable != 'bag_player')
+    fuse = next(n for n in nodes if n.name == 'fuse')
+    assert fuse.parameters['image_kind'] == 'compressed' and fuse.parameters['views'] == VIEWS
+    recorder = next(n for n in nodes if n.name == 'recorder')
+    assert {'/tracks', '/detections', '/D8/homography', '/D1/camera_info'} <= set(recorder.parameters['topics'])
+    assert len(recorder.parameters['topics']) == len(recorder.parameters['types'])
+    player = nodes[-1].parameters
+    assert (player['lockstep_topic'], player['wait_for_subscribers']) == ('/tracks', 3)
 
 
-def test_launch_file_parses_and_names_installed_nodes(node_executable):
-    tree = ast.parse(LAUNCH.read_text(), str(LAUNCH))
-    nodes = {(_kw(c, 'package'), _kw(c, 'executable')) for c in _calls(tree, 'Node')}
-    assert nodes == {('matrix_calib', 'calib'), ('matrix_register', 'register'), ('matrix_bev_tracker', 'fuse'),
-                     ('matrix_ros', 'bag_player'), ('matrix_ros', 'recorder')}
-    for package, executable in nodes:
-        assert node_executable(package, executable).is_file()
+def test_drones_split_over_processes(settings):
+    nodes = graph_nodes(settings(drones_per_process=3), FACTS)
+    calib = [n for n in nodes if n.executable == 'calib']
+    assert [(n.label, n.parameters['views']) for n in calib] == [
+        ('calib_1', ['D1', 'D2', 'D3']), ('calib_2', ['D4', 'D5', 'D6']), ('calib_3', ['D7', 'D8'])]
+    assert [n.label for n in nodes if n.executable == 'register'] == ['register_1', 'register_2', 'register_3']
 
 
-def test_launch_arguments_are_declared_and_described():
-    tree = ast.parse(LAUNCH.read_text())
-    declared = {}
-    for call in _calls(tree, 'DeclareLaunchArgument'):
-        declared[call.args[0].value] = _kw(call, 'description')
-    assert all(declared.values()), declared
-    used = {c.args[0].value for c in _calls(tree, 'LaunchConfiguration') if isinstance(c.args[0], ast.Constant)}
-    used |= {c.args[1].value for c in _calls(tree, '_arg')}
-    assert used <= set(declared), used - set(declared)
-    assert {'bag', 'dataset', 'views', 'checkpoint', 'record', 'lockstep'} <= set(declared)
+def test_monitor_paces_lockstep_on_every_stage(settings):
+    nodes = graph_nodes(settings(drones_per_process=0, monitor=True, views=['D1', 'D5']),
+                        BagFacts(compressed=False, frames=7, has_ground_truth=True))
+    assert [n.label for n in nodes] == ['calib', 'register', 'fuse', 'graph_monitor', 'bag_player']
+    assert nodes[0].parameters['views'] == ['D1', 'D5']
+    monitor = nodes[3].parameters
+    assert monitor['wait_for'] == ['register', 'calib', 'tracks'] and monitor['expected_frames'] == 7
+    player = nodes[-1].parameters
+    # raw images: the monitor reads them too
+    assert (player['lockstep_topic'], player['wait_for_subscribers']) == ('/graph_monitor/frame_done', 4)
+    with pytest.raises(ValueError, match='no ground_truth'):
+        graph_nodes(settings(monitor=True), BagFacts(compressed=False, frames=7, has_ground_truth=False))
+
+
+def test_every_process_is_built_and_its_parameter_files_apply(node_executable, settings):
+    """Parameter files use the `/**` key (they must reach /Dn/register and register_2) and name real parameters."""
+    from matrix_bev_tracker.fuse_node import FuseNodeSettings
+    from matrix_register.register_node import RegisterNodeSettings
+
+    fields = {'register': RegisterNodeSettings, 'fuse': FuseNodeSettings}
+    for node in graph_nodes(settings(record='/out/rec', monitor=True), FACTS):
+        assert node_executable(node.package, node.executable).is_file()
+        for path in node.param_files:
+            (key, body), = yaml.safe_load(Path(path).read_text()).items()
+            assert key == '/**', path
+            assert set(body['ros__parameters']) <= {n for n, *_ in settings_fields(fields[node.name])}, path
+
+
+def test_ros_args_command_line():
+    spec = NodeSpec('matrix_calib', 'calib', 'calib', 'D3', {'views': ['D3'], 'compressed': True, 'rate': 0.5,
+                                                             'config': '/x.yaml'}, ['/p.yaml'])
+    assert spec.ros_args() == ['--ros-args', '-r', '__node:=calib', '-r', '__ns:=/D3', '--params-file', '/p.yaml',
+                               '-p', 'views:=[D3]', '-p', 'compressed:=true', '-p', 'rate:=0.5',
+                               '-p', 'config:=/x.yaml']
+    assert spec.label == 'D3/calib'
+
+
+# --- the launch file, against a stand-in of the launch API -----------------------------------------------
+class _Recorded:
+    def __init__(self, *args, **kwargs):
+        self.args, self.kwargs = args, kwargs
+
+
+class _LaunchConfiguration(_Recorded):
+    def perform(self, context):
+        return context.launch_configurations[self.args[0]]
+
+
+class _OpaqueFunction(_Recorded):
+    def execute(self, context):
+        return self.kwargs['function'](context)
+
+
+def _load_launch_file(monkeypatch):
+    modules = {name: types.ModuleType(name) for name in
+               ('launch', 'launch.actions', 'launch.substitutions', 'launch_ros', 'launch_ros.actions')}
+    modules['launch'].LaunchDescription = _Recorded
+    for name in ('DeclareLaunchArgument', 'SetEnvironmentVariable'):
+        setattr(modules['launch.actions'], name, type(name, (_Recorded,), {}))
+    modules['launch.actions'].OpaqueFunction = _OpaqueFunction
+    modules['launch.substitutions'].LaunchConfiguration = _LaunchConfiguration
+    modules['launch_ros.actions'].Node = type('Node', (_Recorded,), {})
+    for name, module in modules.items():
+        monkeypatch.setitem(sys.modules, name, module)
+    spec = importlib.util.spec_from_file_location('full_graph_launch', LAUNCH)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_launch_file_starts_the_graph_nodes(monkeypatch, tmp_path):
+    from matrix_core.cli.main import main as cli
+
+    sim = tmp_path / 'sim'
+    assert cli(['simulate', '--config', 'simple', '--frames', '2', '--fast', '--bag', '--out', str(sim)]) == 0
+    description = _load_launch_file(monkeypatch).generate_launch_description()
+    declared = {a.args[0]: a.kwargs for a in description.args[0] if type(a).__name__ == 'DeclareLaunchArgument'}
+    fields = {name: (default, help_text) for name, _, default, help_text in settings_fields(GraphSettings)}
+    assert set(declared) == set(fields)
+    assert all(kw['description'] == fields[name][1] and kw['description'] for name, kw in declared.items())
+
+    launch_args = {name: kw['default_value'] for name, kw in declared.items()}
+    launch_args.update(bag=str(sim / 'bag'), dataset=str(sim), views='D2,D4', record=str(tmp_path / 'rec'),
+                       dds_profile='/etc/fastdds.xml')
+    opaque = next(a for a in description.args[0] if isinstance(a, _OpaqueFunction))
+    actions = opaque.execute(types.SimpleNamespace(launch_configurations=launch_args))
+    assert type(actions[0]).__name__ == 'SetEnvironmentVariable'
+    assert actions[0].args == ('FASTRTPS_DEFAULT_PROFILES_FILE', '/etc/fastdds.xml')
+    launched = [a.kwargs for a in actions[1:]]
+    expected = graph_nodes(GraphSettings(bag=str(sim / 'bag'), dataset=str(sim), views=['D2', 'D4'],
+                                         record=str(tmp_path / 'rec'), dds_profile='/etc/fastdds.xml'))
+    assert [(k['package'], k['executable'], k['name'], k['namespace']) for k in launched] == \
+        [(n.package, n.executable, n.name, n.namespace or None) for n in expected]
+    assert [k['parameters'] for k in launched] == [[*n.param_files, n.parameters] for n in expected]
+    calib = launched[0]['parameters'][-1]
+    assert calib['config'].endswith('sim_simple.yaml') and calib['compressed'] is False   # from the dataset and bag
 
 
 @pytest.mark.parametrize('package, name', [('matrix_bev_tracker', 'fuse.yaml')])
 def test_fuse_config_matches_the_node_parameters(install_dir, package, name):
     """Every parameter in config/fuse.yaml is a FuseNodeSettings field with the same default, and every
     parameter of the node itself (not the tracker's, which grow elsewhere) is in the file."""
-    import yaml
-
     from matrix_core.settings import settings_fields
     from matrix_bev_tracker.fuse_node import FuseNodeSettings
 
     params = yaml.safe_load((install_dir / package / 'share' / package / 'config' / name).read_text())
-    params = params['fuse']['ros__parameters']
+    params = params['/**']['ros__parameters']
     defaults = {n: d for n, _, d, _ in settings_fields(FuseNodeSettings)}
     from matrix_core.tracking.settings import TrackerSettings
     own = set(defaults) - set(TrackerSettings.__dataclass_fields__)

@@ -12,8 +12,8 @@ from matrix_core.cli.main import main as cli
 from matrix_core.datasets import open_dataset
 from matrix_core.fusion.fuser import BevFuser
 from matrix_core.fusion.settings import FuseSettings, shipped_checkpoint
-from matrix_core.fusion.views import (ViewInput, ViewInputError, img_H_ground_from_projection,
-                                      img_H_ground_from_registration)
+from matrix_core.fusion.views import (ViewInput, ViewInputError, at_reduced_resolution, img_H_ground_from_projection,
+                                      img_H_ground_from_registration, jpeg_reduction)
 
 torch.set_num_threads(1)
 FRAMES = 4
@@ -143,3 +143,31 @@ def test_settings_validate():
         FuseSettings(device='cuda')
     s = FuseSettings(gate_m=2.0, score_threshold=0.4)
     assert s.tracker_settings().gate_m == 2.0 and s.decode_overrides() == {'score_threshold': 0.4}
+
+
+def test_reduced_jpeg_decode_gives_the_detections_of_the_full_decode(matrix_sample, model):
+    """Real 1920x1080 views as a bag carries them (JPEG): decoded at 1/r size with the homography moved to
+    that resolution, the network sees (almost) the same input and finds the same people."""
+    import cv2
+
+    net, bev = model
+    dataset = open_dataset(matrix_sample)
+    r = jpeg_reduction((1920, 1080), (bev.image_width, bev.image_height))   # complex_quick: 320x176 -> 4
+    assert r == (4 if bev.image_width <= 480 and bev.image_height <= 270 else 2)
+    assert jpeg_reduction((1920, 1080), (480, 272)) == 2 and jpeg_reduction((640, 360), (480, 272)) == 1
+    flag = {2: cv2.IMREAD_REDUCED_COLOR_2, 4: cv2.IMREAD_REDUCED_COLOR_4}[r]
+    full, small = (BevFuser(FuseSettings(area=list(dataset.area)), net, bev) for _ in range(2))
+    for k, frame in enumerate(dataset.frames[:2]):
+        views_full, views_small = {}, {}
+        for v in dataset.views:
+            jpeg = cv2.imencode('.jpg', dataset.load_image(v, frame), [cv2.IMWRITE_JPEG_QUALITY, 95])[1]
+            H = img_H_ground_from_projection(dataset.camera(v, frame).P)
+            views_full[v] = ViewInput(cv2.imdecode(jpeg, cv2.IMREAD_COLOR), H)
+            views_small[v] = ViewInput(cv2.imdecode(jpeg, flag), at_reduced_resolution(H, r))
+            assert views_small[v].image.shape == (1080 // r, 1920 // r, 3)
+        a, b = full.process(1.0 + 0.5 * k, views_full), small.process(1.0 + 0.5 * k, views_small)
+        assert len(a.detections) > 20
+        diff = np.abs(a.heatmap - b.heatmap)
+        d = np.linalg.norm(a.detections.xy[:, None] - b.detections.xy[None], axis=2)
+        assert diff.mean() < 0.005 and diff.max() < 0.3
+        assert abs(len(a.detections) - len(b.detections)) <= 1 and np.median(d.min(axis=1)) < 0.05

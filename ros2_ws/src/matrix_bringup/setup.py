@@ -18,7 +18,8 @@ setup(
     zip_safe=True,
     maintainer='matrix-tracker developers',
     maintainer_email='dev@matrix-tracker.invalid',
-    description='Launch files for the matrix-tracker graph and the graph monitor.',
+    description='The matrix-tracker graph (launch file and run_graph) and the graph monitor.',
     license='Apache-2.0',
-    entry_points={'console_scripts': ['graph_monitor = matrix_bringup.graph_monitor:main']},
+    entry_points={'console_scripts': ['graph_monitor = matrix_bringup.graph_monitor:main',
+                                    'run_graph = matrix_bringup.run_graph:main']},
 )

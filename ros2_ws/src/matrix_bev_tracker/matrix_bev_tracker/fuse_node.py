@@ -41,14 +41,14 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from matrix_core.fusion.fuser import BevFuser, FuseResult, ViewStatus
 from matrix_core.fusion.settings import FuseSettings
-from matrix_core.fusion.views import (ViewInput, ViewInputError, img_H_ground_from_projection,
-                                      img_H_ground_from_registration)
+from matrix_core.fusion.views import (ViewInput, ViewInputError, at_reduced_resolution, img_H_ground_from_projection,
+                                      img_H_ground_from_registration, jpeg_reduction)
 from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
 from matrix_core.tracking import BevDetections
-from matrix_ros.conversions import (ConversionError, compressed_to_image, msg_to_image, seconds_to_stamp,
-                                    stamp_to_seconds)
+from matrix_ros.conversions import (ConversionError, compressed_to_image, is_jpeg, msg_to_image,
+                                    seconds_to_stamp, stamp_to_seconds)
 from matrix_ros.params import declare_settings, spin_node
-from matrix_ros.qos import qos_by_name
+from matrix_ros.qos import publisher_qos, qos_by_name
 
 
 @dataclass
@@ -63,6 +63,10 @@ class FuseNodeSettings(FuseSettings):
     world_frame: str = field(default='world', metadata={'help': 'frame_id of everything published'})
     qos: str = field(default='reliable', metadata={'help': 'QoS of the image subscriptions: reliable or sensor_data'})
     stamp_tolerance: float = field(default=0.001, metadata={'help': 'stamps closer than this (s) are one frame'})
+    jpeg_reduced_decode: bool = field(default=True, metadata={
+        'help': 'decode JPEG images directly at 1/2, 1/4 or 1/8 size when that still covers the network input '
+                '(1920x1080 -> 960x540 for 480x272): about 0.1 s less per frame of 8 views; pixels differ from a '
+                'full decode + resize by < 1 grey level'})
 
     def __post_init__(self):
         super().__post_init__()
@@ -79,6 +83,7 @@ class FuseNode(Node):
         self.settings = s = declare_settings(self, FuseNodeSettings, defaults)
         self.fuser = BevFuser(s)
         self.frames_published = 0
+        self.full_size = {}   # view -> (w, h) of its last fully decoded image
         self._start_fresh()
         qos = qos_by_name(s.qos)
         for view in s.views:
@@ -94,11 +99,12 @@ class FuseNode(Node):
             else:
                 self.create_subscription(CameraInfo, s.topic(s.camera_info_topic, view),
                                          lambda m, v=view: self._add(v, 'geometry', m, m), 10)
-        self.tracks_pub = self.create_publisher(TrackArray, s.tracks_topic, 10)
-        self.dets_pub = self.create_publisher(TrackArray, s.detections_topic, 10)
-        self.markers_pub = self.create_publisher(MarkerArray, s.markers_topic, 10)
-        self.heatmap_pub = self.create_publisher(OccupancyGrid, s.heatmap_topic, 10) if s.heatmap_topic else None
-        self.diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        out = publisher_qos()
+        self.tracks_pub = self.create_publisher(TrackArray, s.tracks_topic, out)
+        self.dets_pub = self.create_publisher(TrackArray, s.detections_topic, out)
+        self.markers_pub = self.create_publisher(MarkerArray, s.markers_topic, out)
+        self.heatmap_pub = self.create_publisher(OccupancyGrid, s.heatmap_topic, out) if s.heatmap_topic else None
+        self.diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', out)
         self.create_service(Trigger, '~/reset', self._on_reset)
         # Sync timeouts run on the wall clock: under /clock in lockstep, sim time stops while the player waits.
         self.create_timer(0.05, self._poll, clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -155,11 +161,26 @@ class FuseNode(Node):
             else:
                 H = img_H_ground_from_projection(geo.p)
             decode, msg = image_item
-            image = decode(msg)
+            image, H = self._decode(view, decode, msg, H)
         except (ViewInputError, ConversionError) as exc:
             self.get_logger().error(f'{view}: not used for this frame: {exc}')
             return ViewInput(reason=str(exc), confidence=confidence)
         return ViewInput(image, H, confidence=confidence)
+
+    def _decode(self, view: str, decode, msg, img_H_ground):
+        """The image and its ground homography: a JPEG at the smallest libjpeg scale that keeps the network
+        input (``jpeg_reduced_decode``), once a full decode told the view's image size."""
+        full = self.full_size.get(view)
+        if decode is compressed_to_image and self.settings.jpeg_reduced_decode and full and is_jpeg(msg):
+            r = jpeg_reduction(full, self.fuser.input_size)
+            if r > 1:
+                image = compressed_to_image(msg, r)
+                if (image.shape[1], image.shape[0]) == (-(-full[0] // r), -(-full[1] // r)):
+                    return image, at_reduced_resolution(img_H_ground, r)
+                # the stream's image size changed: decode in full and learn the new size
+        image = decode(msg)
+        self.full_size[view] = (image.shape[1], image.shape[0])
+        return image, img_H_ground
 
     # --- fusion and output -----------------------------------------------------------------------------
     def _fuse(self, frame) -> None:

@@ -15,7 +15,9 @@ namespace, relative topic names):
 Output stamps equal the input image stamp. Stale results (no acceptable pose in this image) republish
 the last good pose when ``publish_stale`` (diagnostics say it is stale and how old); nothing is
 published before the first good pose. Bad input (empty image, unknown encoding, corrupt JPEG, wrong
-size) gives one error log line per message and the node keeps running.
+size) gives one error log line and an ERROR status per message, and the node keeps running: every image
+gets exactly one ``calib/V`` status with its stamp (what ``graph_monitor`` counts as processed).
+Publishers offer transient-local history (``matrix_ros.qos``).
 """
 
 import time
@@ -36,7 +38,7 @@ from matrix_core.datasets import DatasetError, MatrixDataset
 from matrix_ros.conversions import (ConversionError, camera_to_camera_info, camera_to_pose,
                                     compressed_to_image, msg_to_image, stamp_to_seconds)
 from matrix_ros.params import declare_settings, spin_node
-from matrix_ros.qos import qos_by_name
+from matrix_ros.qos import publisher_qos, qos_by_name
 
 
 @dataclass
@@ -51,6 +53,9 @@ class CalibNodeSettings(CalibSettings):
     intrinsics_topic: str = field(default='', metadata={
         'help': 'per-drone CameraInfo topic (relative to /V/, e.g. ground_truth/camera_info) whose k, d and '
                 'size replace the config intrinsics; its extrinsics are ignored; empty = config only'})
+    threads: int = field(default=1, metadata={
+        'help': 'OpenCV worker threads of this process (1: one core; idle pool threads of many processes on '
+                'few cores cost CPU)'})
     prior_dataset: str = field(default='', metadata={
         'help': 'MATRIX folder whose reference/calibrations (and reference images) give the first prior; '
                 'empty = the config\'s initial_poses'})
@@ -58,24 +63,27 @@ class CalibNodeSettings(CalibSettings):
     def __post_init__(self):
         super().__post_init__()
         qos_by_name(self.qos)
+        if self.threads < 1:
+            raise ValueError('threads must be >= 1')
 
 
 class CalibNode(Node):
     def __init__(self, defaults: CalibNodeSettings):
         super().__init__('calib')
         self.settings = s = declare_settings(self, CalibNodeSettings, defaults)
+        cv2.setNumThreads(s.threads)
         self.scene = load_scene(s.config)
         namespace_view = self.get_namespace().strip('/').split('/')[-1]
         drones = [(v, f'/{v}/') for v in s.views] or [(namespace_view or 'camera', '')]
         reference = MatrixDataset(s.prior_dataset) if s.prior_dataset else None
         self.calibrators, self.pubs = {}, {}
-        self.diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self.diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', publisher_qos())
         qos = qos_by_name(s.qos)
         for view, prefix in drones:
             prior, image = self._prior(view, reference)
             self.calibrators[view] = DroneCalibrator(self.scene, s, prior, image)
-            self.pubs[view] = (self.create_publisher(CameraInfo, f'{prefix}camera_info', 10),
-                               self.create_publisher(PoseStamped, f'{prefix}pose', 10))
+            self.pubs[view] = (self.create_publisher(CameraInfo, f'{prefix}camera_info', publisher_qos()),
+                               self.create_publisher(PoseStamped, f'{prefix}pose', publisher_qos()))
             if s.intrinsics_topic:
                 self.create_subscription(CameraInfo, f'{prefix}{s.intrinsics_topic}',
                                          lambda m, v=view: self._on_intrinsics(v, m), 10)
@@ -120,6 +128,7 @@ class CalibNode(Node):
             result = self.calibrators[view].process(image, stamp_to_seconds(msg.header.stamp))
         except (ConversionError, ValueError) as exc:
             self.get_logger().error(f'{view}: image at {stamp_to_seconds(msg.header.stamp):.3f} s skipped: {exc}')
+            self._diagnose(view, msg.header.stamp, DiagnosticStatus.ERROR, f'bad input: {exc}', {'status': 'bad_input'})
             return
         latency = time.perf_counter() - received
         header = Header(stamp=msg.header.stamp, frame_id=msg.header.frame_id or f'{view}/camera_optical')
@@ -129,15 +138,19 @@ class CalibNode(Node):
             pose_pub.publish(camera_to_pose(result.camera, Header(stamp=msg.header.stamp,
                                                                   frame_id=self.settings.world_frame)))
         level = {OK: DiagnosticStatus.OK, FAILED: DiagnosticStatus.ERROR}.get(result.status, DiagnosticStatus.WARN)
-        values = {'status': result.status, 'reprojection_rms_px': f'{result.rms_px:.3f}',
-                  'corners': str(result.corners), 'pieces_found': str(result.pieces_found),
-                  'pieces_assigned': str(result.pieces_assigned), 'age_s': f'{result.age_s:.3f}',
-                  'latency_s': f'{latency:.3f}', 'full_search': str(result.full_search)}
-        status = DiagnosticStatus(level=level, name=f'calib/{view}', message=result.message,
-                                  hardware_id=view, values=[KeyValue(key=k, value=v) for k, v in values.items()])
-        self.diag_pub.publish(DiagnosticArray(header=Header(stamp=msg.header.stamp), status=[status]))
+        self._diagnose(view, msg.header.stamp, level, result.message, {
+            'status': result.status, 'reprojection_rms_px': f'{result.rms_px:.3f}',
+            'corners': str(result.corners), 'pieces_found': str(result.pieces_found),
+            'pieces_assigned': str(result.pieces_assigned), 'age_s': f'{result.age_s:.3f}',
+            'latency_s': f'{latency:.3f}', 'full_search': str(result.full_search)})
         if result.status != OK:
             self.get_logger().warning(f'{view}: {result.status}: {result.message}')
+
+    def _diagnose(self, view: str, stamp, level, message: str, values: dict) -> None:
+        """One DiagnosticStatus ``calib/<view>`` per image (stamp = the image's), whatever the outcome."""
+        status = DiagnosticStatus(level=level, name=f'calib/{view}', message=message[:250], hardware_id=view,
+                                  values=[KeyValue(key=k, value=v) for k, v in values.items()])
+        self.diag_pub.publish(DiagnosticArray(header=Header(stamp=stamp), status=[status]))
 
 
 def main(argv=None) -> int:

@@ -121,7 +121,7 @@ def test_calib_node_survives_bad_input(matrix_sample, node_executable):
         for data in (b'', b'\xff\xd8 not a jpeg', good):
             pub.publish(CompressedImage(format='jpeg', data=data))
             _spin_until(node, lambda: False, [calib], 1.0)
-        _spin_until(node, lambda: len(diags) >= 1, [calib], 60)
+        _spin_until(node, lambda: len(diags) >= 3, [calib], 60)
         alive = calib.poll() is None
     finally:
         out = _stop([calib])
@@ -129,4 +129,9 @@ def test_calib_node_survives_bad_input(matrix_sample, node_executable):
         rclpy.shutdown()
     assert alive, f'calib died on bad input:\n{out}'
     assert 'empty compressed image' in out and 'corrupt compressed image' in out, out
-    assert len(diags) == 1, 'the good image after the bad ones must still be processed'
+    # one status per image: the bad ones reported as errors, the good one after them still processed
+    statuses = [d.status[0] for d in diags]
+    assert len(statuses) == 3, statuses
+    assert [s.level for s in statuses[:2]] == [DiagnosticStatus.ERROR] * 2
+    assert all(s.message.startswith('bad input') for s in statuses[:2]), statuses
+    assert dict((kv.key, kv.value) for kv in statuses[2].values)['status'] != 'bad_input'

@@ -1,5 +1,6 @@
 """One settings dataclass per component, exposed with the same names and defaults as CLI flags here
-and as ROS parameters by ``matrix_ros.params`` (which reuses :func:`settings_fields`)."""
+and as ROS parameters by ``matrix_ros.params`` (which reuses :func:`settings_fields`); launch files,
+whose arguments are strings, use :func:`setting_to_string` and :func:`settings_from_strings`."""
 
 import argparse
 import dataclasses
@@ -48,3 +49,36 @@ def add_settings_arguments(parser: argparse.ArgumentParser, cls) -> None:
 def settings_from_namespace(cls, namespace: argparse.Namespace):
     """Build ``cls`` from parsed flags; the dataclass's own ``__post_init__`` validates values."""
     return cls(**{name: getattr(namespace, name) for name, *_ in settings_fields(cls)})
+
+
+def setting_to_string(value) -> str:
+    """A setting's value as a launch argument: true/false, numbers, lists comma separated."""
+    if isinstance(value, bool):
+        return 'true' if value else 'false'
+    if isinstance(value, (list, tuple)):
+        return ','.join(setting_to_string(v) for v in value)
+    return str(value)
+
+
+def _from_string(typ, text: str):
+    return _parse_bool(text) if typ is bool else typ(text)
+
+
+def settings_from_strings(cls, values: dict):
+    """Build ``cls`` from strings (launch arguments), missing names keeping their defaults. Lists are
+    comma separated, optionally in brackets and quoted: ``D1,D2``, ``[D1, D2]``, ``['D1','D2']``, '' = []."""
+    kwargs = {}
+    for name, typ, _, _ in settings_fields(cls):
+        if name not in values:
+            continue
+        text = str(values[name]).strip()
+        if typing.get_origin(typ) in (list, tuple):
+            inner = text[1:-1] if text.startswith('[') and text.endswith(']') else text
+            items = [item.strip().strip('\'"') for item in inner.split(',')]
+            kwargs[name] = [_from_string(typing.get_args(typ)[0], item) for item in items if item]
+        else:
+            try:
+                kwargs[name] = _from_string(typ, text)
+            except (ValueError, argparse.ArgumentTypeError) as exc:
+                raise ValueError(f'{cls.__name__}.{name}: {exc}') from exc
+    return cls(**kwargs)

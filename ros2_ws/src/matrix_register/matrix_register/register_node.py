@@ -33,7 +33,7 @@ from matrix_core.register.scene import settings_for_dataset
 from matrix_core.register.settings import RegisterSettings
 from matrix_ros.conversions import ConversionError, camera_info_to_camera, compressed_to_image, msg_to_image
 from matrix_ros.params import declare_settings, spin_node
-from matrix_ros.qos import qos_by_name
+from matrix_ros.qos import publisher_qos, qos_by_name
 
 
 @dataclass
@@ -53,10 +53,15 @@ class RegisterNodeSettings(RegisterSettings):
         'help': 'CameraInfo topic under /<view>/ (used only without reference_dataset)'})
     qos: str = field(default='reliable', metadata={
         'help': 'QoS of the image subscriptions: reliable (large images survive) or sensor_data (best effort)'})
+    threads: int = field(default=1, metadata={
+        'help': 'OpenCV worker threads of this process (1: one core; idle pool threads of many processes on '
+                'few cores cost CPU)'})
 
     def __post_init__(self):
         super().__post_init__()
         qos_by_name(self.qos)
+        if self.threads < 1:
+            raise ValueError('threads must be >= 1')
         if not self.views:
             raise ValueError('views must name at least one drone, e.g. [D1]')
         if len(self.area) != 4 or self.area[0] >= self.area[2] or self.area[1] >= self.area[3]:
@@ -83,6 +88,7 @@ class RegisterNode(Node):
     def __init__(self, defaults: RegisterNodeSettings):
         super().__init__('register')
         self.settings = s = declare_settings(self, RegisterNodeSettings, defaults)
+        cv2.setNumThreads(s.threads)
         self.backend = make_backend(s)
         self.registrars, self.pubs = {}, {}
         self.camera_infos = {v: {} for v in s.views}  # view -> {stamp key: CameraInfo}
@@ -113,8 +119,8 @@ class RegisterNode(Node):
             else:
                 self.create_subscription(Image, f'/{view}/{s.image_topic}',
                                          lambda m, v=view: self._on_image(v, m, msg_to_image), qos)
-            self.pubs[view] = self.create_publisher(HomographyStamped, f'/{view}/homography', 10)
-        self.diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+            self.pubs[view] = self.create_publisher(HomographyStamped, f'/{view}/homography', publisher_qos())
+        self.diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', publisher_qos())
         self.get_logger().info(f'registering {s.views} with backend {self.backend.name} at scale {s.scale}; '
                                f'reference: {s.reference_dataset or "first frame with CameraInfo"}')
 

@@ -7,10 +7,15 @@ Messages with the same bag time form one frame. Two pacings:
 - ``lockstep``: the next frame is published only after ``lockstep_count`` messages stamped with the
   current frame's time arrived on ``lockstep_topic`` (e.g. the fuse node's output), or after
   ``lockstep_timeout`` seconds (logged), so evaluation is deterministic whatever the machine's speed.
+  Before the first frame the player waits until ``lockstep_topic`` has a publisher; the lockstep
+  subscription asks for ``lockstep_qos`` ``history`` (transient local), so an announcement published before
+  the two sides matched still arrives (this workspace's publishers offer it, see ``matrix_ros.qos``).
 
 ``/clock`` (rosgraph_msgs/Clock) carries the bag time of each frame before it is published, so nodes
-started with ``use_sim_time:=true`` follow the recording. When all frames are out the node logs it and,
-with ``exit_when_done``, exits.
+started with ``use_sim_time:=true`` follow the recording. Published topics offer transient-local
+history (``matrix_ros.qos.publisher_qos``). When all frames are out the node logs it and, with
+``exit_when_done``, exits: code 0, or 3 when lockstep timed out for some frame (the run is not
+deterministic), 1 when nothing was played.
 """
 
 import time
@@ -26,7 +31,7 @@ from rosgraph_msgs.msg import Clock
 from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
 from matrix_ros.message_types import message_class
 from matrix_ros.params import parse_node_args, declare_settings
-from matrix_ros.qos import qos_by_name
+from matrix_ros.qos import publisher_qos, qos_by_name
 
 
 @dataclass
@@ -39,6 +44,9 @@ class BagPlayerSettings:
     lockstep_type: str = field(default='', metadata={'help': 'message type of lockstep_topic, e.g. matrix_msgs/msg/TrackArray'})
     lockstep_count: int = field(default=1, metadata={'help': 'messages per frame to wait for on lockstep_topic'})
     lockstep_timeout: float = field(default=30.0, metadata={'help': 'seconds to wait before going on anyway'})
+    lockstep_qos: str = field(default='history', metadata={
+        'help': 'QoS of the lockstep subscription: history (also messages published before matching; needs a '
+                'transient-local publisher, as all of this workspace\'s are) or reliable (any publisher)'})
     wait_for_subscribers: int = field(default=0, metadata={
         'help': 'before the first frame, wait until every image topic has this many subscribers'})
     qos: str = field(default='reliable', metadata={'help': 'QoS of the published topics: reliable or sensor_data'})
@@ -50,6 +58,7 @@ class BagPlayerSettings:
         if self.lockstep and not (self.lockstep_topic and self.lockstep_type):
             raise ValueError('lockstep needs lockstep_topic and lockstep_type')
         qos_by_name(self.qos)
+        qos_by_name(self.lockstep_qos)
 
 
 class BagPlayer(Node):
@@ -61,13 +70,16 @@ class BagPlayer(Node):
         self.reader = Reader(Path(s.bag))
         self.reader.open()
         self.connections = [c for c in self.reader.connections if not s.topics or c.topic in s.topics]
-        qos = qos_by_name(s.qos)
+        qos = publisher_qos(s.qos)
         self.pubs = {c.topic: self.create_publisher(message_class(c.msgtype), c.topic, qos)
                      for c in self.connections}
         self.clock_pub = self.create_publisher(Clock, '/clock', 10)
         self.released = {}  # stamp (s) -> lockstep messages seen
+        self.timed_out = []  # stamps whose lockstep release never came
+        self.lockstep_sub = None
         if s.lockstep:
-            self.create_subscription(message_class(s.lockstep_type), s.lockstep_topic, self._on_lockstep, 50)
+            self.lockstep_sub = self.create_subscription(message_class(s.lockstep_type), s.lockstep_topic,
+                                                         self._on_lockstep, qos_by_name(s.lockstep_qos, 50))
         self.get_logger().info(f'playing {s.bag}: {len(self.pubs)} topics, '
                                + (f'lockstep on {s.lockstep_topic}' if s.lockstep else f'rate {s.rate}'))
 
@@ -95,11 +107,21 @@ class BagPlayer(Node):
 
     def play(self) -> int:
         s = self.settings
-        image_pubs = [p for t, p in self.pubs.items() if 'image' in t]
+        image_pubs = {t: p for t, p in self.pubs.items() if 'image' in t}
         if s.wait_for_subscribers:
             self.get_logger().info(f'waiting for {s.wait_for_subscribers} subscriber(s) on each image topic')
-            self._spin_for(3600, lambda: all(p.get_subscription_count() >= s.wait_for_subscribers
-                                             for p in image_pubs))
+            while rclpy.ok():
+                short = {t: p.get_subscription_count() for t, p in image_pubs.items()
+                         if p.get_subscription_count() < s.wait_for_subscribers}
+                if not short:
+                    break
+                self.get_logger().info('still waiting: ' + ', '.join(f'{t} {n}/{s.wait_for_subscribers}'
+                                                                     for t, n in sorted(short.items())),
+                                       throttle_duration_sec=10.0)
+                self._spin_for(0.2)
+        if self.lockstep_sub is not None and self.lockstep_sub.get_publisher_count() < 1:
+            self.get_logger().info(f'waiting for a publisher on {s.lockstep_topic}')
+            self._spin_for(3600, lambda: self.lockstep_sub.get_publisher_count() >= 1)
         count, previous_ns, wall_start, bag_start = 0, None, time.monotonic(), None
         for time_ns, group in self.frames():
             if not rclpy.ok():
@@ -117,6 +139,7 @@ class BagPlayer(Node):
                 stamp = round(time_ns * 1e-9, 6)
                 self._spin_for(s.lockstep_timeout, lambda: self.released.get(stamp, 0) >= s.lockstep_count)
                 if self.released.get(stamp, 0) < s.lockstep_count:
+                    self.timed_out.append(stamp)
                     self.get_logger().warning(
                         f'lockstep: only {self.released.get(stamp, 0)}/{s.lockstep_count} messages on '
                         f'{s.lockstep_topic} for t={stamp:.3f} s after {s.lockstep_timeout} s; going on')
@@ -125,7 +148,8 @@ class BagPlayer(Node):
         for pub in [*self.pubs.values(), self.clock_pub]:
             pub.wait_for_all_acked(Duration(seconds=5.0))
         self.get_logger().info(f'played {count} frames'
-                               + (f' up to t={previous_ns * 1e-9:.3f} s' if previous_ns else ''))
+                               + (f' up to t={previous_ns * 1e-9:.3f} s' if previous_ns else '')
+                               + (f'; lockstep timed out for {len(self.timed_out)} of them' if self.timed_out else ''))
         return count
 
 
@@ -143,7 +167,7 @@ def main(argv=None) -> int:
         node.reader.close()
         node.destroy_node()
         rclpy.try_shutdown()
-    return 0 if played else 1
+    return 1 if not played else (3 if node.timed_out else 0)
 
 
 if __name__ == '__main__':

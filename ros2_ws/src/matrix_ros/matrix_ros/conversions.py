@@ -69,11 +69,23 @@ def msg_to_image(msg: Image) -> np.ndarray:
     return cv2.cvtColor(img if channels > 1 else img[:, :, 0], code)
 
 
-def compressed_to_image(msg: CompressedImage) -> np.ndarray:
-    """sensor_msgs/CompressedImage (jpeg/png) -> (H, W, 3) BGR uint8."""
+_REDUCED = {1: cv2.IMREAD_COLOR, 2: cv2.IMREAD_REDUCED_COLOR_2, 4: cv2.IMREAD_REDUCED_COLOR_4,
+            8: cv2.IMREAD_REDUCED_COLOR_8}
+
+
+def is_jpeg(msg: CompressedImage) -> bool:
+    return 'jpeg' in msg.format.lower() or 'jpg' in msg.format.lower() or bytes(msg.data[:2]) == b'\xff\xd8'
+
+
+def compressed_to_image(msg: CompressedImage, reduction: int = 1) -> np.ndarray:
+    """sensor_msgs/CompressedImage (jpeg/png) -> (H, W, 3) BGR uint8; a JPEG with ``reduction`` 2, 4 or 8 is
+    decoded directly at that fraction of its size (ceil(W / r) x ceil(H / r))."""
     if len(msg.data) == 0:
         raise ConversionError('empty compressed image')
-    img = cv2.imdecode(np.frombuffer(bytes(msg.data), dtype=np.uint8), cv2.IMREAD_COLOR)
+    if reduction not in _REDUCED:
+        raise ValueError(f'reduction must be 1, 2, 4 or 8, got {reduction}')
+    flag = _REDUCED[reduction] if is_jpeg(msg) else cv2.IMREAD_COLOR
+    img = cv2.imdecode(np.frombuffer(bytes(msg.data), dtype=np.uint8), flag)
     if img is None:
         raise ConversionError(f'corrupt compressed image ({msg.format!r}, {len(msg.data)} bytes)')
     return img

@@ -15,7 +15,7 @@ from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from matrix_core.datasets import DatasetError, open_dataset
 from matrix_ros.conversions import camera_to_camera_info, image_to_msg, seconds_to_stamp
 from matrix_ros.params import declare_settings, spin_node
-from matrix_ros.qos import qos_by_name
+from matrix_ros.qos import publisher_qos, qos_by_name
 
 
 @dataclass
@@ -50,14 +50,14 @@ class DatasetPlayer(Node):
         self.views = list(s.views) or list(self.dataset.views)
         if not self.frames:
             raise DatasetError(f'{s.dataset} has no complete frame to publish')
-        qos = qos_by_name(s.qos)
+        qos = publisher_qos(s.qos)
         self.image_pubs, self.info_pubs = {}, {}
         for view in self.views:
             if s.compressed:
                 self.image_pubs[view] = self.create_publisher(CompressedImage, f'/{view}/image/compressed', qos)
             else:
                 self.image_pubs[view] = self.create_publisher(Image, f'/{view}/image_raw', qos)
-            self.info_pubs[view] = self.create_publisher(CameraInfo, f'/{view}/ground_truth/camera_info', 10)
+            self.info_pubs[view] = self.create_publisher(CameraInfo, f'/{view}/ground_truth/camera_info', publisher_qos())
         self.index = 0
         self.timer = self.create_timer(s.frame_period / s.rate, self._tick)
         self.get_logger().info(f'publishing {len(self.frames)} frames x {len(self.views)} views '

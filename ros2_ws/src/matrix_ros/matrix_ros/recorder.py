@@ -2,7 +2,9 @@
 
 Every topic in ``topics`` (with its type at the same index of ``types``) is stored as received
 (serialized CDR, no re-encoding), with the node's clock as bag time (the bag's time under
-``use_sim_time``). With ``tracks_topic`` set, each ``matrix_msgs/TrackArray`` also becomes lines
+``use_sim_time``). Subscriptions use QoS ``qos``: ``history`` (default) also gets the last messages
+published before the recorder matched (this workspace's publishers offer them), so a recorder that joins
+a moment late loses nothing; a volatile publisher needs ``qos:=reliable``. With ``tracks_topic`` set, each ``matrix_msgs/TrackArray`` also becomes lines
 ``frame id x y`` in ``mot_file`` (frame = round((stamp - start_time) / frame_period); metres, world
 frame), the format ``matrix-tracker score`` reads. The bag is closed cleanly on Ctrl-C / SIGTERM.
 """
@@ -18,6 +20,7 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from matrix_ros.conversions import stamp_to_seconds
 from matrix_ros.message_types import message_class
 from matrix_ros.params import declare_settings, spin_node
+from matrix_ros.qos import qos_by_name
 
 
 @dataclass
@@ -29,12 +32,16 @@ class RecorderSettings:
     mot_file: str = field(default='', metadata={'help': 'text file for the tracks (default: OUT.tracks.txt)'})
     start_time: float = field(default=1.0, metadata={'help': 'stamp of frame 0, seconds'})
     frame_period: float = field(default=0.5, metadata={'help': 'seconds between frames'})
+    qos: str = field(default='history', metadata={
+        'help': 'QoS of the subscriptions: history (transient local: also what was published before matching), '
+                'reliable (volatile publishers) or sensor_data'})
 
     def __post_init__(self):
         if len(self.topics) != len(self.types):
             raise ValueError(f'topics ({len(self.topics)}) and types ({len(self.types)}) must pair up')
         if self.frame_period <= 0:
             raise ValueError('frame_period must be positive')
+        qos_by_name(self.qos)
 
 
 def _typestore():
@@ -67,11 +74,13 @@ class Recorder(Node):
             conn = self.writer.add_connection(topic, type_name, typestore=store)
             self.counts[topic] = 0
             self.create_subscription(message_class(type_name), topic,
-                                     lambda raw, c=conn, t=topic: self._write(c, t, raw), 100, raw=True)
+                                     lambda raw, c=conn, t=topic: self._write(c, t, raw),
+                                     qos_by_name(s.qos, 100), raw=True)
         self.mot = None
         if s.tracks_topic:
             self.mot = open(s.mot_file or f'{s.out}.tracks.txt', 'w')
-            self.create_subscription(message_class('matrix_msgs/msg/TrackArray'), s.tracks_topic, self._tracks, 100)
+            self.create_subscription(message_class('matrix_msgs/msg/TrackArray'), s.tracks_topic, self._tracks,
+                                     qos_by_name(s.qos, 100))
         self.get_logger().info(f'recording {len(s.topics)} topics to {s.out}')
 
     def _write(self, conn, topic, raw: bytes):

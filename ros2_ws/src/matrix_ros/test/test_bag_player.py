@@ -14,6 +14,7 @@ from sensor_msgs.msg import CameraInfo, CompressedImage
 from matrix_core.bags import write_sequence_bag
 from matrix_core.datasets import MatrixDataset
 from matrix_ros.conversions import camera_info_to_camera, compressed_to_image, stamp_to_seconds
+from matrix_ros.qos import publisher_qos
 
 pytestmark = pytest.mark.ros
 
@@ -72,7 +73,7 @@ def test_lockstep_waits_for_the_graph(sample_bag, node_executable):
     arrivals = []
     rclpy.init()
     node = rclpy.create_node('lockstep_test')
-    ack = node.create_publisher(PointStamped, '/ack', 10)
+    ack = node.create_publisher(PointStamped, '/ack', publisher_qos())   # as the graph's nodes offer it
     node.create_subscription(CompressedImage, '/D3/image/compressed', lambda m: None, 10)
     node.create_subscription(CameraInfo, '/D3/ground_truth/camera_info',
                              lambda m: arrivals.append((time.monotonic(), m.header)), 10)

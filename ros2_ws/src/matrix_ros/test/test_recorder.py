@@ -1,5 +1,6 @@
 """recorder in its own process: what the graph publishes ends up in a bag (readable by rosbags) and the
-tracks in MOT-style text, and SIGTERM closes both cleanly."""
+tracks in MOT-style text, and SIGTERM closes both cleanly. Frames published before the recorder existed
+are recorded too (this workspace's publishers offer transient-local history; the recorder asks for it)."""
 
 import signal
 import subprocess
@@ -15,6 +16,7 @@ from std_msgs.msg import Header
 from matrix_core.bags import bag_topics, read_bag
 from matrix_core.datasets import MatrixDataset
 from matrix_ros.conversions import camera_to_camera_info, seconds_to_stamp
+from matrix_ros.qos import publisher_qos
 
 pytestmark = pytest.mark.ros
 
@@ -22,17 +24,21 @@ pytestmark = pytest.mark.ros
 def test_records_standard_and_custom_messages(matrix_sample, node_executable, tmp_path):
     ds = MatrixDataset(matrix_sample)
     out = tmp_path / 'rec'
-    rec = subprocess.Popen([str(node_executable('matrix_ros', 'recorder')), '--ros-args',
-                            '-p', f'out:={out}', '-p', 'topics:=[/D2/camera_info,/tracks]',
-                            '-p', 'types:=[sensor_msgs/msg/CameraInfo,matrix_msgs/msg/TrackArray]',
-                            '-p', 'tracks_topic:=/tracks'],
-                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+    def start_recorder():
+        return subprocess.Popen([str(node_executable('matrix_ros', 'recorder')), '--ros-args',
+                                 '-p', f'out:={out}', '-p', 'topics:=[/D2/camera_info,/tracks]',
+                                 '-p', 'types:=[sensor_msgs/msg/CameraInfo,matrix_msgs/msg/TrackArray]',
+                                 '-p', 'tracks_topic:=/tracks'],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    procs = []
     try:
-        _exercise(rec, ds)
+        _exercise(start_recorder, procs, ds)
     finally:
-        if rec.poll() is None:
-            rec.kill()
-            rec.communicate()
+        for rec in procs:
+            if rec.poll() is None:
+                rec.kill()
+                rec.communicate()
     lines = (tmp_path / 'rec.tracks.txt').read_text().split('\n')
     assert lines[:4] == ['0 7 1.0000 -2.0000', '0 9 5.0000 -6.5000', '1 7 2.0000 -2.0000', '1 9 5.0000 -7.5000']
     assert bag_topics(out) == {'/D2/camera_info': ('sensor_msgs/msg/CameraInfo', 3),
@@ -41,23 +47,28 @@ def test_records_standard_and_custom_messages(matrix_sample, node_executable, tm
     assert list(infos[2].p) == pytest.approx(list(camera_to_camera_info(ds.camera('D2', 2)).p))
 
 
-def _exercise(rec, ds):
-    """Publish three frames of CameraInfo and tracks, then SIGTERM the recorder; it must exit cleanly."""
+def _exercise(start_recorder, procs, ds):
+    """Publish two frames of CameraInfo and tracks, start the recorder, publish a third, then SIGTERM the
+    recorder; it must have all three and exit cleanly."""
     rclpy.init()
     node = rclpy.create_node('recorder_test')
     try:
-        info_pub = node.create_publisher(CameraInfo, '/D2/camera_info', 10)
-        track_pub = node.create_publisher(TrackArray, '/tracks', 10)
-        deadline = time.monotonic() + 30
-        while (info_pub.get_subscription_count() < 1 or track_pub.get_subscription_count() < 2) \
-                and time.monotonic() < deadline:
-            rclpy.spin_once(node, timeout_sec=0.1)
-        time.sleep(1.0)  # discovery is not symmetric: let the recorder's side match our publishers too
-        for i in range(3):
+        info_pub = node.create_publisher(CameraInfo, '/D2/camera_info', publisher_qos())
+        track_pub = node.create_publisher(TrackArray, '/tracks', publisher_qos())
+
+        def publish(i):
             header = Header(stamp=seconds_to_stamp(1.0 + 0.5 * i), frame_id='world')
             info_pub.publish(camera_to_camera_info(ds.camera('D2', i), header))
             track_pub.publish(TrackArray(header=header, tracks=[
                 Track(id=7, position=Point(x=1.0 + i, y=-2.0)), Track(id=9, position=Point(x=5.0, y=-6.5 - i))]))
+        publish(0)
+        publish(1)   # before the recorder exists
+        procs.append(rec := start_recorder())
+        deadline = time.monotonic() + 30
+        while (info_pub.get_subscription_count() < 1 or track_pub.get_subscription_count() < 2) \
+                and time.monotonic() < deadline:
+            rclpy.spin_once(node, timeout_sec=0.1)
+        publish(2)   # no wait for the recorder's side of the matching: history covers it
         for pub in (info_pub, track_pub):
             pub.wait_for_all_acked(rclpy.duration.Duration(seconds=5))
         time.sleep(1.0)

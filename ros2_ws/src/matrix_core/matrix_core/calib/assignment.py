@@ -56,7 +56,7 @@ class Assignment:
 def _pose_ippe(world: np.ndarray, uv: np.ndarray, camera: Camera):
     ok, rvec, tvec = cv2.solvePnP(world.reshape(-1, 1, 3), uv.reshape(-1, 1, 2), camera.K, camera.dist,
                                   flags=cv2.SOLVEPNP_IPPE)
-    if not ok:
+    if not ok or not (np.all(np.isfinite(rvec)) and np.all(np.isfinite(tvec))):   # degenerate (e.g. collinear) grid
         return None
     R = cv2.Rodrigues(rvec)[0]
     proj, _ = cv2.projectPoints(world.reshape(-1, 1, 3), rvec, tvec, camera.K, camera.dist)

@@ -110,6 +110,16 @@ def default_config_path(name: str = DEFAULT_CONFIG_NAME) -> Path:
     raise FileNotFoundError(f'calibration config {name} not found in {[str(c) for c in candidates]}')
 
 
+def config_for_dataset(root) -> Path:
+    """The shipped config that fits a MATRIX-format folder: ``sim_<variant>.yaml`` for a folder written by
+    this project's simulator (its ``matrix_tracker_meta.json`` names the variant; the configs are for
+    1920x1080), else the real MATRIX sample's."""
+    from matrix_core.datasets import MatrixDataset
+
+    variant = MatrixDataset(root).meta.get('simulator', {}).get('config', {}).get('name')
+    return default_config_path(f'sim_{variant}.yaml' if variant else DEFAULT_CONFIG_NAME)
+
+
 def load_scene(path=None) -> CalibScene:
     """Load a scene YAML (``None`` or '' = the shipped MATRIX sample config)."""
     path = default_config_path() if not path else Path(path)

@@ -70,7 +70,8 @@ class DroneCalibrator:
         self.prior_is_initial = True
         self.last_good = None
         self.last_good_stamp = None
-        self.motion = GroundMotion(settings.motion_scale) if settings.motion_scale > 0 else None
+        self.motion = GroundMotion(settings.motion_scale, matcher=settings.motion_matcher) \
+            if settings.motion_scale > 0 else None
         self.previous_features = None
         self.previous_small = None
         if initial_image is not None:
@@ -139,6 +140,9 @@ class DroneCalibrator:
         """Calibrate from one (H, W, 3) BGR or (H, W) grey uint8 image taken at ``stamp`` seconds."""
         s = self.settings
         t_start = time.perf_counter()
+        # Every RANSAC below draws from OpenCV's global RNG: seeding it per image makes the result depend on
+        # this image and this drone's history only, not on other drones sharing the process.
+        cv2.setRNGSeed(s.seed)
         gray = self._gray(image)
         width, height = self.scene.image_size
         if gray.shape[:2] != (height, width):
@@ -157,11 +161,12 @@ class DroneCalibrator:
             rect = board_rectification(predicted[board.name], board, self.prior, s.px_per_square, margin)
             if rect is not None:
                 pieces += find_pieces(gray, rect[0], rect[1], s.pattern_size, s.max_pieces_per_board,
-                                      s.refine_subpixel)
+                                      s.refine_subpixel, s.detect_accuracy)
         full_search = not pieces and s.full_search
         if full_search:
             pieces = find_pieces(gray, None, None, s.pattern_size,
-                                 s.max_pieces_per_board * len(self.scene.boards), refine=False)
+                                 s.max_pieces_per_board * len(self.scene.boards), refine=False,
+                                 accuracy=s.detect_accuracy)
         timings['detect'] = time.perf_counter() - t
         t = time.perf_counter()
         info = dict(pieces_found=len(pieces), full_search=full_search, timings_s=timings, motion=motion_how)

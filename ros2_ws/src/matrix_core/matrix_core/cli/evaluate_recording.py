@@ -4,7 +4,8 @@ REC is the ``recorder``'s bag folder (matrix_msgs/TrackArray tracks and detectio
 /detections of the ``fuse`` node; its /bev_heatmap too, if recorded, fixes the grid) or its MOT text
 (``frame id x y``). SEQUENCE_BAG is the bag that was replayed (``/ground_truth/pedestrians``). Frames are
 ``round((stamp - start) / period)``. Detection metrics are of the detections when recorded (else of the
-tracks); tracking metrics of the tracks. Prints the table of ``evaluate`` and lists frames without tracks.
+tracks); tracking metrics of the tracks. Prints the table of ``evaluate`` and lists frames without tracks;
+``--png`` draws the recorded tracks beside the ground-truth trajectories.
 """
 
 import json
@@ -27,6 +28,7 @@ def add_parser(subparsers) -> None:
     p.add_argument('--threshold', type=float, default=0.5, help='detection match distance, m (default: 0.5)')
     p.add_argument('--gate', type=float, default=1.0, help='tracking match distance, m (default: 1.0)')
     p.add_argument('--json', help='also write the metrics to this JSON file')
+    p.add_argument('--png', help='also draw the tracks and the ground-truth trajectories into this PNG')
     p.set_defaults(func=run)
 
 
@@ -50,9 +52,30 @@ def run(args) -> int:
     print(format_metrics(result.detection, result.tracking))
     if lost is not None:
         print(f'frames without a TrackArray: {lost if lost else "none"}')
+    if args.png:
+        _draw(args.png, result, args.area or recording.area, args.recording)
     if args.json:
         Path(args.json).write_text(json.dumps({
             'detection': result.detection.as_dict(),
             'tracking': result.tracking.as_dict() if result.tracking else None,
             'detections_source': result.detections_source, 'frames_without_tracks': lost}, indent=2))
     return 0
+
+
+def _draw(path, result, area, name) -> None:
+    """Tracks beside the ground truth over ``area`` (default: where the ground truth is, plus 1 m)."""
+    import numpy as np
+
+    from matrix_core.bev.plots import save_trajectories_png
+    from matrix_core.geometry.grid import BevGrid
+    from matrix_core.metrics import BevPoints
+
+    if area is None:
+        xy = result.gt.xy if len(result.gt) else np.zeros((1, 2))
+        area = (*(xy.min(axis=0) - 1.0), *(xy.max(axis=0) + 1.0))
+    tracks = result.recording.tracks
+    if tracks is None:
+        tracks = BevPoints(np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0, np.int64))
+    save_trajectories_png(path, result.gt, tracks, BevGrid(*map(float, area)),
+                          f'live recording {Path(name).name}: tracks vs ground truth')
+    print(f'wrote {path}')

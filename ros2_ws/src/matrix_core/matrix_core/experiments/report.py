@@ -93,7 +93,7 @@ class Report:
                                       f'({100 * s["transfer_fraction"]:.0f} %) of the modified training sequence'),
                 ('network', f'`{s["model"]}`, input {s["image_width"]}x{s["image_height"]} px, BEV cells '
                             f'{s["cell_m"]} m, temporal fusion on'),
-                ('training', f'{s["epochs"]} epochs, lr {s["lr"]}, batch 1, AdamW, view dropout 0.15, '
+                ('training', f'{s["epochs"]} epochs, lr {s["lr"]}, batch {s["batch_size"]}, AdamW, view dropout 0.15, '
                              f'steps per epoch: {s["max_steps_per_epoch"] or "all frames"}'),
                 ('training seeds (exp. 5)', ', '.join(str(x) for x in s['seeds'])),
                 ('camera dropout (exp. 4)', f'rates {", ".join(f"{r:g}" for r in s["dropout_rates"])}; subset seeds '

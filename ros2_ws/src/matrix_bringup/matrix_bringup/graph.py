@@ -1,0 +1,205 @@
+"""The live graph as data: which nodes run, with which parameters, to replay one sequence bag.
+
+Both ways of starting the graph build their processes from :func:`graph_nodes`: ``launch/full_graph.launch.py``
+on a full ROS 2 install (``ros2 launch``), and ``run_graph`` in this repository's pip environment, which
+has no ``launch`` package and starts the same executables from ``install/``. Pure Python (no rclpy, no
+launch), so the graph itself is tested with plain pytest.
+
+    bag_player --> calib (per drone) ------------------------------> [graph_monitor]
+               --> register (per drone) --> fuse --> recorder
+                                                 \\-> [graph_monitor]
+
+With one drone per process the calib and register processes run in namespace /Dn; their topics are the
+absolute /Dn/... either way.
+
+Lockstep: the player releases the next frame when the fuse node published tracks for the last one, or,
+with ``monitor``, when the monitor saw every stage (calib, register and tracks) finish it, so that no node
+falls behind the replay.
+"""
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from matrix_core.bags import bag_topics
+
+VIEWS = [f'D{i}' for i in range(1, 9)]
+RECORDED = (('/tracks', 'matrix_msgs/msg/TrackArray'), ('/detections', 'matrix_msgs/msg/TrackArray'),
+            ('/bev_heatmap', 'nav_msgs/msg/OccupancyGrid'), ('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray'))
+PER_VIEW_RECORDED = (('camera_info', 'sensor_msgs/msg/CameraInfo'), ('pose', 'geometry_msgs/msg/PoseStamped'),
+                     ('homography', 'matrix_msgs/msg/HomographyStamped'))
+
+
+@dataclass
+class GraphSettings:
+    """Launch arguments of ``full_graph.launch.py`` and flags of ``run_graph`` (same names and defaults)."""
+
+    bag: str = field(default='', metadata={
+        'help': 'sequence bag to replay (matrix-tracker bag DATASET --out BAG, or matrix-tracker simulate --bag)'})
+    dataset: str = field(default='', metadata={
+        'help': "the MATRIX-format folder the bag came from: its reference/ images and calibrations are "
+                "register's references and calib's first prior"})
+    views: list[str] = field(default_factory=lambda: list(VIEWS), metadata={'help': 'drones to run'})
+    drones_per_process: int = field(default=1, metadata={
+        'help': 'drones per calib and per register process: 1 = one process each per drone, in namespace /Dn '
+                '(as on one computer per drone); N > 1: processes calib_1, calib_2, ... with N drones each; '
+                '0 = one process each for all drones'})
+    calib_config: str = field(default='', metadata={
+        'help': "calibration scene YAML (boards, intrinsics); empty: the shipped one for the dataset "
+                "(sim_<variant>.yaml for a simulated folder, else matrix_sample.yaml)"})
+    register_params: str = field(default='', metadata={
+        'help': 'ROS parameter file of register; empty: matrix_register/config/register.yaml'})
+    fuse_params: str = field(default='', metadata={
+        'help': 'ROS parameter file of fuse; empty: matrix_bev_tracker/config/fuse.yaml'})
+    input_kind: str = field(default='homography', metadata={
+        'help': "fuse on register's homographies (homography) or on calib's camera_info (camera_info)"})
+    checkpoint: str = field(default='', metadata={'help': 'BEV checkpoint (.pt); empty: the fuse node default'})
+    sync_timeout: float = field(default=5.0, metadata={
+        'help': 'seconds the fuse node waits for a late drone before fusing without it'})
+    lockstep: bool = field(default=True, metadata={
+        'help': 'true: the next frame leaves the bag once the last one is processed (deterministic); '
+                'false: the recorded timing scaled by rate'})
+    lockstep_timeout: float = field(default=120.0, metadata={
+        'help': 'seconds the player waits for a frame to be processed before going on (logged)'})
+    rate: float = field(default=1.0, metadata={'help': 'replay speed without lockstep'})
+    record: str = field(default='', metadata={
+        'help': 'bag folder the recorder creates (must not exist; tracks as MOT text beside it); empty: no recorder'})
+    monitor: bool = field(default=False, metadata={
+        'help': "also run graph_monitor: scores calib and register against the bag's ground truth and paces "
+                'lockstep on every stage (needs ground_truth/camera_info in the bag)'})
+    monitor_out: str = field(default='out/graph_monitor', metadata={'help': "graph_monitor's table and picture"})
+    dds_profile: str = field(default='', metadata={
+        'help': 'Fast DDS profile XML for every node, e.g. share/matrix_bringup/config/fastdds.xml (large images '
+                "in shared memory, 0.1 s heartbeat); empty: the environment's FASTRTPS_DEFAULT_PROFILES_FILE"})
+
+    def __post_init__(self):
+        if self.input_kind not in ('homography', 'camera_info'):
+            raise ValueError(f'input_kind must be homography or camera_info, got {self.input_kind!r}')
+        if not self.views:
+            raise ValueError('views must name at least one drone')
+        if self.drones_per_process < 0:
+            raise ValueError('drones_per_process must be >= 0')
+        if self.sync_timeout <= 0 or self.lockstep_timeout <= 0 or self.rate <= 0:
+            raise ValueError('sync_timeout, lockstep_timeout and rate must be positive')
+
+
+@dataclass
+class NodeSpec:
+    """One process of the graph: what ``launch_ros.actions.Node`` takes (and ``ros2 run`` would start).
+
+    ``param_files`` are ROS parameter YAML files applied first; ``parameters`` override them.
+    """
+
+    package: str
+    executable: str
+    name: str
+    namespace: str = ''
+    parameters: dict = field(default_factory=dict)
+    param_files: list = field(default_factory=list)
+
+    @property
+    def label(self) -> str:
+        """'D3/calib', 'fuse', ...: unique within a graph (log file names)."""
+        return f'{self.namespace}/{self.name}' if self.namespace else self.name
+
+    def ros_args(self) -> list:
+        """Command-line form: ``--ros-args -r __node:=NAME [-r __ns:=/NS] [--params-file F] -p k:=v ...``."""
+        args = ['--ros-args', '-r', f'__node:={self.name}']
+        if self.namespace:
+            args += ['-r', f'__ns:=/{self.namespace}']
+        for path in self.param_files:
+            args += ['--params-file', str(path)]
+        for key, value in self.parameters.items():
+            args += ['-p', f'{key}:={_param_text(value)}']
+        return args
+
+
+def _param_text(value) -> str:
+    """A parameter value as ``-p`` parses it (YAML): true/false, numbers, [a,b], strings as is."""
+    if isinstance(value, bool):
+        return 'true' if value else 'false'
+    if isinstance(value, (list, tuple)):
+        return '[' + ','.join(_param_text(v) for v in value) + ']'
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+def share_file(package: str, *parts: str) -> str:
+    """A file installed under ``share/<package>/`` (as FindPackageShare finds it)."""
+    from ament_index_python.packages import get_package_share_directory
+
+    return str(Path(get_package_share_directory(package), *parts))
+
+
+@dataclass(frozen=True)
+class BagFacts:
+    """What the graph needs to know of the bag: image transport, frame count and the topics to play (the
+    chosen views' and the scene-wide ones; empty = all)."""
+
+    compressed: bool
+    frames: int
+    has_ground_truth: bool
+    topics: tuple = ()
+
+    @classmethod
+    def read(cls, bag: str, views) -> 'BagFacts':
+        if not (Path(bag) / 'metadata.yaml').is_file():
+            raise FileNotFoundError(f'not a rosbag2 folder (no metadata.yaml): {bag!r}')
+        topics = bag_topics(bag)
+        raw = [topics[t][1] for v in views if (t := f'/{v}/image_raw') in topics]
+        compressed = [topics[t][1] for v in views if (t := f'/{v}/image/compressed') in topics]
+        if len(raw) + len(compressed) != len(views) or (raw and compressed):
+            raise ValueError(f'{bag}: expected one image topic per view ({views}), all raw or all compressed; '
+                             f'it has {sorted(t for t in topics if "image" in t)}')
+        gt = all(f'/{v}/ground_truth/camera_info' in topics for v in views)
+        drone = [t.split('/')[1] for t in topics]   # '/D3/image_raw' -> 'D3'
+        played = tuple(sorted(t for t, d in zip(topics, drone) if d in views or not re.fullmatch(r'D\d+', d)))
+        return cls(bool(compressed), max(raw or compressed), gt, played)
+
+
+def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
+    """The graph's processes, in start order (the player last: it waits for the others' subscriptions)."""
+    from matrix_core.calib.scene import config_for_dataset
+
+    if not s.bag or not s.dataset:
+        raise ValueError('bag and dataset are required')
+    bag = bag or BagFacts.read(s.bag, s.views)
+    if s.monitor and not bag.has_ground_truth:
+        raise ValueError(f'{s.bag} has no ground_truth/camera_info for every view: the monitor cannot score')
+    sim = {'use_sim_time': True}
+    calib = {'config': s.calib_config or str(config_for_dataset(s.dataset)), 'prior_dataset': s.dataset,
+             'qos': 'reliable', 'compressed': bag.compressed, **sim}
+    register = {'reference_dataset': s.dataset, 'compressed': bag.compressed, **sim}
+    register_files = [s.register_params or share_file('matrix_register', 'config', 'register.yaml')]
+    size = s.drones_per_process or len(s.views)
+    groups = [list(s.views[i:i + size]) for i in range(0, len(s.views), size)]
+    nodes = []
+    for k, group in enumerate(groups, 1):
+        ns = group[0] if size == 1 else ''
+        suffix = f'_{k}' if size > 1 and len(groups) > 1 else ''
+        nodes += [NodeSpec('matrix_calib', 'calib', f'calib{suffix}', ns, {**calib, 'views': group}),
+                  NodeSpec('matrix_register', 'register', f'register{suffix}', ns, {**register, 'views': group},
+                           register_files)]
+    fuse = {'views': list(s.views), 'input_kind': s.input_kind, 'image_kind': 'compressed' if bag.compressed else 'raw',
+            'sync_timeout': s.sync_timeout, **({'checkpoint': s.checkpoint} if s.checkpoint else {}), **sim}
+    nodes.append(NodeSpec('matrix_bev_tracker', 'fuse', 'fuse', '', fuse,
+                          [s.fuse_params or share_file('matrix_bev_tracker', 'config', 'fuse.yaml')]))
+    if s.record:
+        topics = [*RECORDED, *((f'/{v}/{t}', m) for v in s.views for t, m in PER_VIEW_RECORDED)]
+        nodes.append(NodeSpec('matrix_ros', 'recorder', 'recorder', '', {
+            'out': s.record, 'topics': [t for t, _ in topics], 'types': [m for _, m in topics],
+            'tracks_topic': '/tracks', **sim}))
+    if s.monitor:
+        nodes.append(NodeSpec('matrix_bringup', 'graph_monitor', 'graph_monitor', '', {
+            'views': list(s.views), 'expected_frames': bag.frames, 'wait_for': ['register', 'calib', 'tracks'],
+            'idle_timeout': s.lockstep_timeout, 'out_dir': s.monitor_out}))
+    # Every image topic is read by calib, register and fuse (the monitor reads raw images too).
+    readers = 3 + (1 if s.monitor and not bag.compressed else 0)
+    player = {'bag': s.bag, 'rate': s.rate, 'wait_for_subscribers': readers, 'lockstep': s.lockstep,
+              'lockstep_timeout': s.lockstep_timeout, **({'topics': list(bag.topics)} if bag.topics else {})}
+    if s.lockstep:
+        player.update({'lockstep_topic': '/graph_monitor/frame_done', 'lockstep_type': 'std_msgs/msg/Header'}
+                      if s.monitor else {'lockstep_topic': '/tracks', 'lockstep_type': 'matrix_msgs/msg/TrackArray'})
+    nodes.append(NodeSpec('matrix_ros', 'bag_player', 'bag_player', '', player))
+    return nodes
