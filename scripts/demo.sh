@@ -37,7 +37,7 @@ BAG=$OUT/matrix_sample_bag
 if [ ! -f "$BAG/metadata.yaml" ]; then
   echo "== bag: $SAMPLE -> $BAG"
   rm -rf "$BAG"
-  matrix-tracker bag "$SAMPLE" --out "$BAG" --compressed
+  matrix-tracker bag "$SAMPLE" --out "$BAG"   # raw Image: exactly the sample's pixels (a JPEG of its JPEGs moves poses)
 fi
 live_graph real "$BAG" "$SAMPLE"
 

@@ -43,6 +43,11 @@ def test_per_drone_graph_has_one_calib_and_register_per_drone(settings):
     assert len(recorder.parameters['topics']) == len(recorder.parameters['types'])
     player = nodes[-1].parameters
     assert (player['lockstep_topic'], player['wait_for_subscribers']) == ('/tracks', 3)
+    # lockstep: fuse waits for every view as long as the player waits (deterministic); else sync_timeout
+    assert fuse.parameters['sync_timeout'] == player['lockstep_timeout'] == 120.0
+    free = graph_nodes(settings(lockstep=False, sync_timeout=2.0), FACTS)
+    assert next(n for n in free if n.name == 'fuse').parameters['sync_timeout'] == 2.0
+    assert 'lockstep_topic' not in free[-1].parameters and free[-1].parameters['lockstep'] is False
 
 
 def test_drones_split_over_processes(settings):

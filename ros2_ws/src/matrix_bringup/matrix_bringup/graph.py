@@ -55,7 +55,8 @@ class GraphSettings:
         'help': "fuse on register's homographies (homography) or on calib's camera_info (camera_info)"})
     checkpoint: str = field(default='', metadata={'help': 'BEV checkpoint (.pt); empty: the fuse node default'})
     sync_timeout: float = field(default=5.0, metadata={
-        'help': 'seconds the fuse node waits for a late drone before fusing without it'})
+        'help': 'seconds the fuse node waits for a late drone before fusing without it (without lockstep; '
+                'in lockstep it waits lockstep_timeout, so that every view is fused)'})
     lockstep: bool = field(default=True, metadata={
         'help': 'true: the next frame leaves the bag once the last one is processed (deterministic); '
                 'false: the recorded timing scaled by rate'})
@@ -181,8 +182,10 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
         nodes += [NodeSpec('matrix_calib', 'calib', f'calib{suffix}', ns, {**calib, 'views': group}),
                   NodeSpec('matrix_register', 'register', f'register{suffix}', ns, {**register, 'views': group},
                            register_files)]
+    # In lockstep the fuse node waits as long as the player: every view is fused, results are deterministic.
     fuse = {'views': list(s.views), 'input_kind': s.input_kind, 'image_kind': 'compressed' if bag.compressed else 'raw',
-            'sync_timeout': s.sync_timeout, **({'checkpoint': s.checkpoint} if s.checkpoint else {}), **sim}
+            'sync_timeout': s.lockstep_timeout if s.lockstep else s.sync_timeout,
+            **({'checkpoint': s.checkpoint} if s.checkpoint else {}), **sim}
     nodes.append(NodeSpec('matrix_bev_tracker', 'fuse', 'fuse', '', fuse,
                           [s.fuse_params or share_file('matrix_bev_tracker', 'config', 'fuse.yaml')]))
     if s.record:

@@ -181,13 +181,19 @@ class RegisterNode(Node):
             self._hold(view, msg, image)
 
     def _bad_input(self, view: str, msg, text: str) -> None:
+        """An undecodable image still gets its (failed) homography: the fuse node need not wait for it."""
         self.get_logger().error(f'{view}: image at {_stamp_text(msg.header.stamp)} not registered: {text}')
+        self.pubs[view].publish(self._failed(msg.header, f'bad input: {text}'))
         self._diagnose(view, msg.header, DiagnosticStatus.ERROR, f'bad input: {text}', None)
 
-    def _publish_failed(self, view: str, msg, reason: str) -> None:
-        out = HomographyStamped(header=msg.header)
+    def _failed(self, header, reason: str) -> HomographyStamped:
+        out = HomographyStamped(header=header)
         out.h_cur_to_ref, out.h_img_to_ground = _flat(None), _flat(None)
         out.status, out.backend = f'failed: {reason}', self.backend.name
+        return out
+
+    def _publish_failed(self, view: str, msg, reason: str) -> None:
+        out = self._failed(msg.header, reason)
         self.pubs[view].publish(out)
         self.get_logger().warning(f'{view}: image at {_stamp_text(msg.header.stamp)} not registered: {reason}')
         self._diagnose(view, msg.header, DiagnosticStatus.WARN, out.status, None)

@@ -95,6 +95,8 @@ def test_register_node_over_dds(matrix_sample, node_executable):
     assert alive, f'register node died on a corrupt image; {log}'
     assert bad_reported(), f'no diagnostics error for the corrupt image; {log}'
     assert 'too short' in register_out, log
+    failed = [m for m in got[VIEWS[0]] if m.header.stamp.sec == 99]   # downstream learns of it too
+    assert failed and failed[0].status.startswith('failed: bad input') and not any(failed[0].h_img_to_ground), log
 
     for view in VIEWS:
         msgs = got[view]
