@@ -20,6 +20,7 @@ machine every process shares 2 cores, so the graph's rate is reported as measure
 
 import argparse
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -85,13 +86,13 @@ def main() -> int:
     bag, dataset = (Path(args.bag), Path(args.dataset)) if args.bag else simulated_sequence(out / 'sim', args.frames)
     checkpoint = args.checkpoint or (str(CHECKPOINT) if not args.bag else '')
     run = out / 'run'
-    subprocess.run(['rm', '-rf', str(run)], check=True)
+    shutil.rmtree(run, ignore_errors=True)
     settings = GraphSettings(bag=str(bag), dataset=str(dataset), drones_per_process=args.drones_per_process,
                              checkpoint=checkpoint, monitor=True, monitor_out=str(run / 'monitor'),
                              record=str(run / 'recording'), lockstep_timeout=300.0)
     facts = BagFacts.read(settings.bag, settings.views)
     specs = graph_nodes(settings, facts)
-    graph = Graph(specs, run / 'logs')
+    graph = Graph(run / 'logs', settings.dds_profile)
     rclpy.init()
     probe = Probe(settings.views[0], facts.compressed)
     cpu_start = cpu_end = None

@@ -171,7 +171,7 @@ class FuseNode(Node):
         """The image and its ground homography: a JPEG at the smallest libjpeg scale that keeps the network
         input (``jpeg_reduced_decode``), once a full decode told the view's image size."""
         full = self.full_size.get(view)
-        if decode is compressed_to_image and self.settings.jpeg_reduced_decode and full and is_jpeg(msg):
+        if isinstance(msg, CompressedImage) and self.settings.jpeg_reduced_decode and full and is_jpeg(msg):
             r = jpeg_reduction(full, self.fuser.input_size)
             if r > 1:
                 image = compressed_to_image(msg, r)

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from matrix_core.bags import bag_topics
+from matrix_core.settings import setting_to_string
 
 VIEWS = [f'D{i}' for i in range(1, 9)]
 RECORDED = (('/tracks', 'matrix_msgs/msg/TrackArray'), ('/detections', 'matrix_msgs/msg/TrackArray'),
@@ -116,14 +117,9 @@ class NodeSpec:
 
 
 def _param_text(value) -> str:
-    """A parameter value as ``-p`` parses it (YAML): true/false, numbers, [a,b], strings as is."""
-    if isinstance(value, bool):
-        return 'true' if value else 'false'
-    if isinstance(value, (list, tuple)):
-        return '[' + ','.join(_param_text(v) for v in value) + ']'
-    if isinstance(value, float):
-        return repr(value)
-    return str(value)
+    """A parameter value as ``-p`` parses it (YAML): a launch-argument string, lists in brackets."""
+    text = setting_to_string(value)
+    return f'[{text}]' if isinstance(value, (list, tuple)) else text
 
 
 def share_file(package: str, *parts: str) -> str:

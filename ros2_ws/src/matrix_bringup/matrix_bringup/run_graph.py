@@ -44,10 +44,12 @@ def _die_with_parent():   # runs in the child between fork and exec
 
 
 class Graph:
-    """The running processes of a list of :class:`NodeSpec`, each logging to its own file."""
+    """The running processes of :class:`NodeSpec` s, each logging to its own file (``dds_profile``: the Fast DDS
+    profile they all get, '' = the environment's)."""
 
-    def __init__(self, specs, log_dir: Path, env: dict = None):
-        self.specs, self.log_dir, self.env = list(specs), Path(log_dir), env
+    def __init__(self, log_dir: Path, dds_profile: str = ''):
+        self.log_dir = Path(log_dir)
+        self.env = {**os.environ, 'FASTRTPS_DEFAULT_PROFILES_FILE': dds_profile} if dds_profile else None
         self.procs = {}   # label -> Popen
 
     def start(self, spec: NodeSpec) -> None:
@@ -94,8 +96,7 @@ class Graph:
 def run(settings: GraphSettings, log_dir: Path, stop_timeout: float = 10.0, echo=print) -> int:
     """Start the graph, play the bag, stop everything; returns the exit code described above."""
     specs = graph_nodes(settings)
-    env = {**os.environ, 'FASTRTPS_DEFAULT_PROFILES_FILE': settings.dds_profile} if settings.dds_profile else None
-    graph = Graph(specs, log_dir, env)
+    graph = Graph(log_dir, settings.dds_profile)
     player, monitor = specs[-1].label, next((s.label for s in specs if s.executable == 'graph_monitor'), None)
     interrupted = []
     previous = {sig: signal.signal(sig, lambda *_: interrupted.append(True)) for sig in (signal.SIGINT, signal.SIGTERM)}

@@ -87,5 +87,6 @@ def jpeg_reduction(full_size: tuple, input_size: tuple) -> int:
 def at_reduced_resolution(img_H_ground: np.ndarray, r: int) -> np.ndarray:
     """``img_H_ground`` of the full image -> the same for the image decoded at 1/r (pixel centres:
     u_small = (u_full + 0.5) / r - 0.5)."""
-    small_H_full = np.array([[1.0 / r, 0.0, 0.5 / r - 0.5], [0.0, 1.0 / r, 0.5 / r - 0.5], [0.0, 0.0, 1.0]])
-    return small_H_full @ img_H_ground
+    from matrix_core.bev.lifting import pixel_scale_homography
+
+    return pixel_scale_homography(1.0 / r, 1.0 / r) @ img_H_ground   # small_H_full
