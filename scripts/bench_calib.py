@@ -8,7 +8,6 @@ frame plus the accuracy against the stored calibration.
 
     python scripts/bench_calib.py [--dataset ../shared/matrix_sample] [--scales 1.0 0.5] [--repeat 1]
     python scripts/bench_calib.py --sim-frames 50      # also: issue 4's simulated acceptance, 3 variants
-    python scripts/bench_calib.py --track_corners false  # any CalibSettings flag (here: search every frame)
 
 With ``--sim-frames N`` it also simulates N frames of each simulator variant (seed 7) into a temporary
 folder and reports accuracy against the true poses and time per frame (1920x1080).
@@ -28,32 +27,28 @@ from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.calib.tracker import OK, DroneCalibrator
 from matrix_core.datasets import MatrixDataset
-from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
 
 def scaled(image, scale):
     return image if scale == 1.0 else cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
 
 
-def bench(dataset, scale, repeat, settings):
+def bench(dataset, scale, repeat):
     scene = load_scene()
     S = np.array([[scale, 0, 0.5 * scale - 0.5], [0, scale, 0.5 * scale - 0.5], [0, 0, 1.0]])  # pixel centres
     w, h = scene.image_size
     scene = scene.with_intrinsics(S @ scene.K, scene.dist, (round(w * scale), round(h * scale)))
-    times, rot, ctr, statuses, stages, tracked = [], [], [], [], {}, 0
+    times, rot, ctr, statuses = [], [], [], []
     for _ in range(repeat):
         for view in dataset.views:
             ref = scaled(cv2.imread(str(dataset.reference_image_path(view))), scale)
-            cal = DroneCalibrator(scene, settings, dataset.reference_camera(view), ref)
+            cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view), ref)
             for index, frame in enumerate(dataset.frames):
                 image = scaled(dataset.load_image(view, frame), scale)
                 t = time.perf_counter()
                 r = cal.process(image, 0.5 * index)
                 times.append(time.perf_counter() - t)
                 statuses.append(r.status)
-                tracked += r.tracked
-                for stage, seconds in r.timings_s.items():
-                    stages.setdefault(stage, []).append(seconds * 1000)
                 if r.status == OK:
                     e = pose_errors(r.camera, dataset.camera(view, frame))
                     rot.append(e[0])
@@ -62,16 +57,14 @@ def bench(dataset, scale, repeat, settings):
     size = f'{scene.image_size[0]}x{scene.image_size[1]}'
     line = (f'{size}: {len(t)} frames, time per frame median {np.median(t):.0f} ms, '
             f'p95 {np.percentile(t, 95):.0f} ms, max {t.max():.0f} ms; ok {statuses.count(OK)}, '
-            f'stale {statuses.count("stale")}, failed {statuses.count("failed")}, tracked {tracked} '
-            f'(stage medians: ' + ', '.join(f'{k} {np.median(v):.0f} ms' for k, v in stages.items() if k != 'total')
-            + ')')
+            f'stale {statuses.count("stale")}, failed {statuses.count("failed")}')
     if rot:
         line += (f'; ok frames vs stored: rotation median {np.median(rot):.3f} deg (max {max(rot):.3f}), '
                  f'centre median {np.median(ctr) * 100:.1f} cm (max {max(ctr) * 100:.1f})')
     print(line, flush=True)
 
 
-def bench_sim(frames: int, overrides: dict):
+def bench_sim(frames: int):
     from matrix_core.calib.cli_support import simulated_sequence
     from matrix_core.calib.evaluation import summarize_errors
     from matrix_core.calib.scene import default_config_path
@@ -81,7 +74,7 @@ def bench_sim(frames: int, overrides: dict):
     for variant in ('simple', 'complex', 'modified'):
         with tempfile.TemporaryDirectory() as tmp:
             data = simulated_sequence(variant, frames, 7, Path(tmp) / 'data')
-            settings = CalibSettings(config=str(default_config_path(f'sim_{variant}.yaml')), **overrides)
+            settings = CalibSettings(config=str(default_config_path(f'sim_{variant}.yaml')))
             rows = calibrate_dataset(open_dataset(data), Path(tmp) / 'calib', settings, compare=True)
         s = summarize_errors(rows)
         t = np.array([r['time_s'] for r in rows]) * 1000
@@ -101,19 +94,15 @@ def main():
     parser.add_argument('--scales', type=float, nargs='*', default=[1.0, 0.5])
     parser.add_argument('--repeat', type=int, default=1)
     parser.add_argument('--sim-frames', type=int, default=0, help='also run the simulated acceptance (0 = off)')
-    add_settings_arguments(parser, CalibSettings)
     args = parser.parse_args()
-    settings = settings_from_namespace(CalibSettings, args)
-    # The simulated variants take their own scene config; every other flag applies to them too.
-    overrides = {k: v for k, v in vars(settings).items() if k != 'config' and v != getattr(CalibSettings(), k)}
     cv2.setNumThreads(1)  # one core, as on each drone's computer
     dataset = MatrixDataset(args.dataset)
     print(f'bench_calib: {dataset.root}, {len(dataset.views)} drones x {len(dataset.frames)} frames, '
-          f'1 OpenCV thread, {settings}')
+          f'1 OpenCV thread, {CalibSettings()}')
     for scale in args.scales:
-        bench(dataset, scale, args.repeat, settings)
+        bench(dataset, scale, args.repeat)
     if args.sim_frames:
-        bench_sim(args.sim_frames, overrides)
+        bench_sim(args.sim_frames)
 
 
 if __name__ == '__main__':
