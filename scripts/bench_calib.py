@@ -8,6 +8,7 @@ frame plus the accuracy against the stored calibration.
 
     python scripts/bench_calib.py [--dataset ../shared/matrix_sample] [--scales 1.0 0.5] [--repeat 1]
     python scripts/bench_calib.py --sim-frames 50      # also: issue 4's simulated acceptance, 3 variants
+    python scripts/bench_calib.py --track_corners false  # any CalibSettings flag (here: search every frame)
 
 With ``--sim-frames N`` it also simulates N frames of each simulator variant (seed 7) into a temporary
 folder and reports accuracy against the true poses and time per frame (1920x1080).
@@ -27,28 +28,32 @@ from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.calib.tracker import OK, DroneCalibrator
 from matrix_core.datasets import MatrixDataset
+from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
 
 def scaled(image, scale):
     return image if scale == 1.0 else cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
 
 
-def bench(dataset, scale, repeat):
+def bench(dataset, scale, repeat, settings):
     scene = load_scene()
     S = np.array([[scale, 0, 0.5 * scale - 0.5], [0, scale, 0.5 * scale - 0.5], [0, 0, 1.0]])  # pixel centres
     w, h = scene.image_size
     scene = scene.with_intrinsics(S @ scene.K, scene.dist, (round(w * scale), round(h * scale)))
-    times, rot, ctr, statuses = [], [], [], []
+    times, rot, ctr, statuses, stages, tracked = [], [], [], [], {}, 0
     for _ in range(repeat):
         for view in dataset.views:
             ref = scaled(cv2.imread(str(dataset.reference_image_path(view))), scale)
-            cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view), ref)
+            cal = DroneCalibrator(scene, settings, dataset.reference_camera(view), ref)
             for index, frame in enumerate(dataset.frames):
                 image = scaled(dataset.load_image(view, frame), scale)
                 t = time.perf_counter()
                 r = cal.process(image, 0.5 * index)
                 times.append(time.perf_counter() - t)
                 statuses.append(r.status)
+                tracked += r.tracked
+                for stage, seconds in r.timings_s.items():
+                    stages.setdefault(stage, []).append(seconds * 1000)
                 if r.status == OK:
                     e = pose_errors(r.camera, dataset.camera(view, frame))
                     rot.append(e[0])
@@ -57,14 +62,16 @@ def bench(dataset, scale, repeat):
     size = f'{scene.image_size[0]}x{scene.image_size[1]}'
     line = (f'{size}: {len(t)} frames, time per frame median {np.median(t):.0f} ms, '
             f'p95 {np.percentile(t, 95):.0f} ms, max {t.max():.0f} ms; ok {statuses.count(OK)}, '
-            f'stale {statuses.count("stale")}, failed {statuses.count("failed")}')
+            f'stale {statuses.count("stale")}, failed {statuses.count("failed")}, tracked {tracked} '
+            f'(stage medians: ' + ', '.join(f'{k} {np.median(v):.0f} ms' for k, v in stages.items() if k != 'total')
+            + ')')
     if rot:
         line += (f'; ok frames vs stored: rotation median {np.median(rot):.3f} deg (max {max(rot):.3f}), '
                  f'centre median {np.median(ctr) * 100:.1f} cm (max {max(ctr) * 100:.1f})')
     print(line, flush=True)
 
 
-def bench_sim(frames: int):
+def bench_sim(frames: int, overrides: dict):
     from matrix_core.calib.cli_support import simulated_sequence
     from matrix_core.calib.evaluation import summarize_errors
     from matrix_core.calib.scene import default_config_path
@@ -74,7 +81,7 @@ def bench_sim(frames: int):
     for variant in ('simple', 'complex', 'modified'):
         with tempfile.TemporaryDirectory() as tmp:
             data = simulated_sequence(variant, frames, 7, Path(tmp) / 'data')
-            settings = CalibSettings(config=str(default_config_path(f'sim_{variant}.yaml')))
+            settings = CalibSettings(config=str(default_config_path(f'sim_{variant}.yaml')), **overrides)
             rows = calibrate_dataset(open_dataset(data), Path(tmp) / 'calib', settings, compare=True)
         s = summarize_errors(rows)
         t = np.array([r['time_s'] for r in rows]) * 1000
@@ -94,15 +101,19 @@ def main():
     parser.add_argument('--scales', type=float, nargs='*', default=[1.0, 0.5])
     parser.add_argument('--repeat', type=int, default=1)
     parser.add_argument('--sim-frames', type=int, default=0, help='also run the simulated acceptance (0 = off)')
+    add_settings_arguments(parser, CalibSettings)
     args = parser.parse_args()
+    settings = settings_from_namespace(CalibSettings, args)
+    # The simulated variants take their own scene config; every other flag applies to them too.
+    overrides = {k: v for k, v in vars(settings).items() if k != 'config' and v != getattr(CalibSettings(), k)}
     cv2.setNumThreads(1)  # one core, as on each drone's computer
     dataset = MatrixDataset(args.dataset)
     print(f'bench_calib: {dataset.root}, {len(dataset.views)} drones x {len(dataset.frames)} frames, '
-          f'1 OpenCV thread, {CalibSettings()}')
+          f'1 OpenCV thread, {settings}')
     for scale in args.scales:
-        bench(dataset, scale, args.repeat)
+        bench(dataset, scale, args.repeat, settings)
     if args.sim_frames:
-        bench_sim(args.sim_frames)
+        bench_sim(args.sim_frames, overrides)
 
 
 if __name__ == '__main__':

@@ -142,7 +142,7 @@ class CalibNode(Node):
             'status': result.status, 'reprojection_rms_px': f'{result.rms_px:.3f}',
             'corners': str(result.corners), 'pieces_found': str(result.pieces_found),
             'pieces_assigned': str(result.pieces_assigned), 'age_s': f'{result.age_s:.3f}',
-            'latency_s': f'{latency:.3f}', 'full_search': str(result.full_search)})
+            'latency_s': f'{latency:.3f}', 'full_search': str(result.full_search), 'tracked': str(result.tracked)})
         if result.status != OK:
             self.get_logger().warning(f'{view}: {result.status}: {result.message}')
 

@@ -92,17 +92,14 @@ def saddle_counts(maps: list, max_shift: int = 2) -> dict:
     All boards share one correction (a camera translation moves every board alike); this assumes boards
     with the same square size and axes, as in MATRIX scenes.
     """
-    counts = {}
-    for di in range(-max_shift, max_shift + 1):
-        for dj in range(-max_shift, max_shift + 1):
-            parity = 1 if (di + dj) % 2 == 0 else -1
-            count = 0
-            for m in maps:
-                t = m.ij + [di, dj]
-                inside = (t[:, 0] >= 0) & (t[:, 0] < m.board.nx) & (t[:, 1] >= 0) & (t[:, 1] < m.board.ny)
-                count += int(np.sum(inside & (m.polarity == parity)))
-            counts[(di, dj)] = count
-    return counts
+    shifts = np.array([(di, dj) for di in range(-max_shift, max_shift + 1) for dj in range(-max_shift, max_shift + 1)])
+    parity = np.where(shifts.sum(axis=1) % 2 == 0, 1, -1)
+    total = np.zeros(len(shifts), dtype=int)
+    for m in maps:   # (shifts, corners) at once
+        ti, tj = m.ij[None, :, 0] + shifts[:, :1], m.ij[None, :, 1] + shifts[:, 1:]
+        inside = (ti >= 0) & (ti < m.board.nx) & (tj >= 0) & (tj < m.board.ny)
+        total += np.sum(inside & (m.polarity[None, :] == parity[:, None]), axis=1)
+    return {(int(di), int(dj)): int(n) for (di, dj), n in zip(shifts, total)}
 
 
 def best_correction(maps: list, max_shift: int = 2, margin: int = 8) -> tuple:

@@ -37,10 +37,14 @@ class GroundMotion:
                  ransac_px: float = 2.0, min_inliers: int = 40, matcher: str = 'brute'):
         self.scale, self.ratio, self.ransac_px, self.min_inliers = scale, ratio, ransac_px, min_inliers
         self.orb = cv2.ORB_create(features, fastThreshold=10)
-        # LSH: about 40 ms instead of 150 ms for 3000 x 3000 binary descriptors, slightly worse priors
+        # LSH: about 35 ms instead of 100-150 ms for 3000 x 3000 binary descriptors, slightly worse priors
         # (its hash tables draw from OpenCV's RNG, which the tracker seeds per image).
-        self.matcher = cv2.FlannBasedMatcher(dict(algorithm=6, table_number=6, key_size=12, multi_probe_level=1),
-                                             dict(checks=50)) if matcher == 'lsh' else cv2.BFMatcher(cv2.NORM_HAMMING)
+        self.matchers = {'lsh': cv2.FlannBasedMatcher(dict(algorithm=6, table_number=6, key_size=12,
+                                                           multi_probe_level=1), dict(checks=50)),
+                         'brute': cv2.BFMatcher(cv2.NORM_HAMMING)}
+        if matcher not in self.matchers:
+            raise ValueError(f'matcher must be one of {sorted(self.matchers)}, got {matcher!r}')
+        self.matcher = matcher
 
     def features(self, gray: np.ndarray) -> Features:
         """ORB features of an (H, W) uint8 image (found at ``scale``, returned in full-resolution pixels)."""
@@ -50,11 +54,12 @@ class GroundMotion:
         pts = (pts + 0.5) / self.scale - 0.5
         return Features(pts, desc if desc is not None else np.zeros((0, 32), np.uint8))
 
-    def homography(self, previous: Features, current: Features):
-        """(cur_H_prev (3, 3), inlier count) or (None, inliers) when too few matches agree."""
+    def homography(self, previous: Features, current: Features, matcher: str = ''):
+        """(cur_H_prev (3, 3), inlier count) or (None, inliers) when too few matches agree; ``matcher``
+        ('lsh' or 'brute') overrides the one given at construction."""
         if previous is None or len(previous.points) < 8 or len(current.points) < 8:
             return None, 0
-        pairs = self.matcher.knnMatch(previous.descriptors, current.descriptors, k=2)
+        pairs = self.matchers[matcher or self.matcher].knnMatch(previous.descriptors, current.descriptors, k=2)
         good = [p[0] for p in pairs if len(p) == 2 and p[0].distance < self.ratio * p[1].distance]
         if len(good) < self.min_inliers:
             return None, len(good)

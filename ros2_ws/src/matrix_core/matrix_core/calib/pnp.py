@@ -35,7 +35,10 @@ def solve_pnp(world: np.ndarray, uv: np.ndarray, intrinsics: Camera, ransac_thre
         return None
     kwargs = dict(reprojectionError=ransac_threshold_px, confidence=0.999, iterationsCount=200,
                   flags=cv2.SOLVEPNP_SQPNP)
-    ok, rvec, tvec, inl = cv2.solvePnPRansac(world, img, intrinsics.K, intrinsics.dist, **kwargs)
+    try:
+        ok, rvec, tvec, inl = cv2.solvePnPRansac(world, img, intrinsics.K, intrinsics.dist, **kwargs)
+    except cv2.error:   # SQPnP asserts on degenerate samples (measured: corners predicted by a bad homography)
+        return None
     if not ok or inl is None or len(inl) < 6:
         return None
     inliers = np.zeros(len(world), dtype=bool)

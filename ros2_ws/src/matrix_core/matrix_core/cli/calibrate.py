@@ -23,7 +23,7 @@ from matrix_core.datasets import DatasetError, MatrixDataset, MatrixWriter, open
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
 STATUS_FILE = 'calibration_status.csv'
-COLUMNS = ('view', 'frame', 'status', 'rms_px', 'corners', 'pieces_found', 'pieces_assigned', 'age_s',
+COLUMNS = ('view', 'frame', 'status', 'rms_px', 'corners', 'pieces_found', 'pieces_assigned', 'tracked', 'age_s',
            'time_s', 'rot_err_deg', 'centre_err_m', 'message')
 
 
@@ -72,7 +72,7 @@ def calibrate_dataset(dataset: MatrixDataset, out: Path, settings: CalibSettings
                 result = calibrator.process(dataset.load_image(view, frame), index * frame_period)
                 row = {'view': view, 'frame': frame, 'status': result.status, 'rms_px': result.rms_px,
                        'corners': result.corners, 'pieces_found': result.pieces_found,
-                       'pieces_assigned': result.pieces_assigned, 'age_s': result.age_s,
+                       'pieces_assigned': result.pieces_assigned, 'tracked': result.tracked, 'age_s': result.age_s,
                        'time_s': result.timings_s.get('total', float('nan')), 'rot_err_deg': float('nan'),
                        'centre_err_m': float('nan'), 'message': result.message}
                 if result.camera is not None:

@@ -1,0 +1,104 @@
+#!/usr/bin/env python3
+"""Benchmark of one drone's own work, calibration + registration of each frame, on ONE CPU core.
+
+In deployment each drone has its own computer running its calib and register nodes; at the dataset's
+2 Hz that computer keeps up when calib + register take at most 0.5 s per frame on average. This runs
+both cores (matrix_core.calib.DroneCalibrator, matrix_core.register.Registrar, default settings, one
+OpenCV / torch thread) frame after frame for every drone of a MATRIX folder and prints per folder the
+time per frame of each and of both (median, mean, p95, max) and whether the mean keeps up.
+
+    python scripts/bench_drone.py                                   # real sample + simulated complex 1080p
+    python scripts/bench_drone.py --dataset DIR [--dataset DIR2 ..]  # MATRIX folders with reference/
+    python scripts/bench_drone.py --sim-frames 0                     # real sample only
+    python scripts/bench_drone.py --track_corners true               # any CalibSettings flag
+"""
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+from tqdm import tqdm
+
+from matrix_core.calib.cli_support import simulated_sequence
+from matrix_core.calib.scene import config_for_dataset, load_scene
+from matrix_core.calib.settings import CalibSettings
+from matrix_core.calib.tracker import OK, DroneCalibrator
+from matrix_core.datasets import MatrixDataset
+from matrix_core.register.registrar import Registrar
+from matrix_core.register.scene import settings_for_dataset
+from matrix_core.register.settings import RegisterSettings
+from matrix_core.settings import add_settings_arguments, settings_from_namespace
+
+PERIOD_S = 0.5  # the MATRIX frame period (2 Hz)
+
+
+def _figures(ms: np.ndarray) -> str:
+    return (f'median {np.median(ms):.0f} ms, mean {ms.mean():.0f}, p95 {np.percentile(ms, 95):.0f}, '
+            f'max {ms.max():.0f}')
+
+
+def bench(root: Path, calib_settings: CalibSettings) -> bool:
+    """Run every drone of ``root``; prints the figures, returns whether the mean keeps up with 2 Hz."""
+    dataset = MatrixDataset(root)
+    scene = load_scene(str(config_for_dataset(root)))
+    register_settings, _ = settings_for_dataset(RegisterSettings(), dataset)
+    calib_ms, register_ms, ok, tracked, registered = [], [], 0, 0, 0
+    with tqdm(total=len(dataset.views) * len(dataset.frames), desc=root.name, unit='image', leave=False) as bar:
+        for view in dataset.views:
+            reference = cv2.imread(str(dataset.reference_image_path(view)))
+            calibrator = DroneCalibrator(scene, calib_settings, dataset.reference_camera(view), reference)
+            registrar = Registrar(register_settings, reference, dataset.reference_camera(view), dataset.area,
+                                  f'{view}/reference')
+            for index, frame in enumerate(dataset.frames):
+                image = dataset.load_image(view, frame)
+                t = time.perf_counter()
+                c = calibrator.process(image, PERIOD_S * index)
+                calib_ms.append(1000 * (time.perf_counter() - t))
+                t = time.perf_counter()
+                r = registrar.register(image, frame)
+                register_ms.append(1000 * (time.perf_counter() - t))
+                ok, tracked, registered = ok + (c.status == OK), tracked + c.tracked, registered + r.ok
+                bar.update()
+    calib_ms, register_ms = np.array(calib_ms), np.array(register_ms)
+    both = calib_ms + register_ms
+    keeps_up = both.mean() <= 1000 * PERIOD_S
+    print(f'{root}: {len(dataset.views)} drones x {len(dataset.frames)} frames, '
+          f'{dataset.reference_camera(dataset.views[0]).width}x{dataset.reference_camera(dataset.views[0]).height}\n'
+          f'  calib     {_figures(calib_ms)} (ok {ok}, of them tracked {tracked}, of {len(both)})\n'
+          f'  register  {_figures(register_ms)} (registered {registered} of {len(both)})\n'
+          f'  both      {_figures(both)}: {"keeps" if keeps_up else "does NOT keep"} up with 2 Hz on one core '
+          f'(mean <= {1000 * PERIOD_S:.0f} ms); frames over 500 ms: {int((both > 1000 * PERIOD_S).sum())}',
+          flush=True)
+    return keeps_up
+
+
+def main() -> int:
+    root = Path(__file__).resolve().parent.parent
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('--dataset', action='append', help='MATRIX folder with reference/ (repeatable; default: '
+                        'the real sample)')
+    parser.add_argument('--sim-frames', type=int, default=20, help='also simulate this many frames of the complex '
+                        'variant at 1920x1080 (seed 7) and run them (0 = off)')
+    add_settings_arguments(parser, CalibSettings)   # e.g. --track_corners true; the config follows each folder
+    args = parser.parse_args()
+    calib_settings = settings_from_namespace(CalibSettings, args)
+    cv2.setNumThreads(1)
+    import torch
+    torch.set_num_threads(1)
+    shared = Path(os.environ.get('MATRIX_SHARED', str(root.parent / 'shared')))
+    folders = [Path(d) for d in (args.dataset or [shared / 'matrix_sample'])]
+    with tempfile.TemporaryDirectory() as tmp:
+        if args.sim_frames:
+            folders.append(simulated_sequence('complex', args.sim_frames, 7, Path(tmp) / 'sim_complex'))
+        for folder in folders:
+            bench(folder, calib_settings)   # prints its verdict; a missed target is a figure, not an error of `make bench`
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
