@@ -1,6 +1,7 @@
 """Fault tests of the `fuse` node (its own process, over DDS; this test publishes the drones' streams):
 a corrupt image and a NaN homography are logged and only that view is dropped, a stopped drone makes the
-frame go out after the sync timeout with 7 views while tracking continues, and a restarted node resumes."""
+frame go out after the sync timeout with 7 views while tracking continues, and a restarted node resumes;
+a view's images are subscribed only once its homography stream is connected (no homography lost at start)."""
 
 import subprocess
 import time
@@ -95,9 +96,10 @@ class Drones:
         rclpy.shutdown(context=self.context)
 
 
-def _fuse(node_executable):
-    return subprocess.Popen([str(node_executable('matrix_bev_tracker', 'fuse')), '--ros-args', '-p',
-                             'sync_timeout:=2.0', '-p', 'image_kind:=both', '-p', 'tracker_reset_gap_s:=2.0'],
+def _fuse(node_executable, *params):
+    args = ['sync_timeout:=2.0', 'image_kind:=both', 'tracker_reset_gap_s:=2.0', *params]
+    return subprocess.Popen([str(node_executable('matrix_bev_tracker', 'fuse')), '--ros-args',
+                             *[a for p in args for a in ('-p', p)]],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
 
@@ -160,3 +162,37 @@ def test_faults_and_restart(node_executable, tmp_path):
     assert used(replayed) == 8 and 'time went back, starting fresh' in log2 and 'published 3 frames' in log2
     fresh = drones.tracks[replayed].tracks
     assert all(t.age == 0 for t in fresh) and (not fresh or min(t.id for t in fresh) == 1), log2
+
+
+def test_images_wait_for_the_homography_stream(node_executable):
+    context = Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node('late_register', context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+
+    def spin_until(condition, timeout):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and not condition():
+            executor.spin_once(timeout_sec=0.05)
+        return condition()
+
+    images = {v: node.create_publisher(CompressedImage, f'/{v}/image/compressed', qos_by_name('reliable'))
+              for v in ('D1', 'D2')}
+    fuse = _fuse(node_executable, 'views:=[D1,D2]', 'image_kind:=compressed')
+    try:
+        assert spin_until(lambda: node.count_subscribers('/D1/homography') == 1, 60.0), 'fuse did not start'
+        spin_until(lambda: False, 3.0)
+        assert [p.get_subscription_count() for p in images.values()] == [0, 0]
+        homography = node.create_publisher(HomographyStamped, '/D1/homography', 10)
+        assert spin_until(lambda: images['D1'].get_subscription_count() == 1, 30.0)
+        spin_until(lambda: False, 1.0)
+        assert images['D2'].get_subscription_count() == 0 and homography.get_subscription_count() == 1
+        log = _stop(fuse)
+    finally:
+        if fuse.poll() is None:
+            _stop(fuse)
+        node.destroy_node()
+        rclpy.shutdown(context=context)
+    assert 'D2: waiting for a publisher on /D2/homography before subscribing its images' in log, log
+    assert 'D1: /D1/homography connected; images subscribed' in log, log

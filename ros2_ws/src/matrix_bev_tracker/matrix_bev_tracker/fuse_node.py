@@ -5,7 +5,8 @@ Per view ``V`` in ``views`` it subscribes the image (``image_topic`` sensor_msgs
 ``input_kind=homography`` ``homography_topic`` (matrix_msgs/HomographyStamped from ``register``; a status
 other than ``ok`` or a confidence below ``min_confidence`` makes the view missing), with
 ``input_kind=camera_info`` ``camera_info_topic`` (CameraInfo, ``p = K [R | t]``, from ``calib`` or a bag's
-ground truth). Messages are grouped by header stamp (matrix_core.sync.FrameSynchronizer); a frame is fused
+ground truth). A view's images are subscribed once its geometry stream has a matched publisher
+(``matrix_ros.connect``: no frame's geometry is lost at start-up). Messages are grouped by header stamp (matrix_core.sync.FrameSynchronizer); a frame is fused
 when every view arrived or ``sync_timeout`` wall-clock seconds after its first message, with the views
 that did arrive (a stopped drone never stalls the graph). The core is matrix_core.fusion.fuser.BevFuser.
 
@@ -45,6 +46,7 @@ from matrix_core.fusion.views import (ViewInput, ViewInputError, at_reduced_reso
                                       img_H_ground_from_registration, jpeg_reduction)
 from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
 from matrix_core.tracking import BevDetections
+from matrix_ros.connect import SubscribeWhenConnected
 from matrix_ros.conversions import (ConversionError, compressed_to_image, is_jpeg, msg_to_image,
                                     seconds_to_stamp, stamp_to_seconds)
 from matrix_ros.params import declare_settings, spin_node
@@ -85,20 +87,7 @@ class FuseNode(Node):
         self.frames_published = 0
         self.full_size = {}   # view -> (w, h) of its last fully decoded image
         self._start_fresh()
-        qos = qos_by_name(s.qos)
-        for view in s.views:
-            if s.image_kind in ('raw', 'both'):
-                self.create_subscription(Image, s.topic(s.image_topic, view),
-                                         lambda m, v=view: self._add(v, 'image', m, (msg_to_image, m)), qos)
-            if s.image_kind in ('compressed', 'both'):
-                self.create_subscription(CompressedImage, s.topic(s.compressed_topic, view),
-                                         lambda m, v=view: self._add(v, 'image', m, (compressed_to_image, m)), qos)
-            if s.input_kind == 'homography':
-                self.create_subscription(HomographyStamped, s.topic(s.homography_topic, view),
-                                         lambda m, v=view: self._add(v, 'geometry', m, m), 10)
-            else:
-                self.create_subscription(CameraInfo, s.topic(s.camera_info_topic, view),
-                                         lambda m, v=view: self._add(v, 'geometry', m, m), 10)
+        self.connections = {v: self._subscribe_view(v) for v in s.views}
         out = publisher_qos()
         self.tracks_pub = self.create_publisher(TrackArray, s.tracks_topic, out)
         self.dets_pub = self.create_publisher(TrackArray, s.detections_topic, out)
@@ -111,6 +100,24 @@ class FuseNode(Node):
         self.get_logger().info(
             f'fusing {len(s.views)} views ({s.image_kind} images, {s.input_kind}) with {s.checkpoint_path()}; '
             f'grid {self.fuser.grid.shape} cells of {self.fuser.grid.cell} m; tracks on {s.tracks_topic}')
+
+    def _subscribe_view(self, view: str) -> SubscribeWhenConnected:
+        """The view's geometry now, its images once the geometry has a publisher (matrix_ros.connect)."""
+        s = self.settings
+        geometry_type, geometry_topic = ((HomographyStamped, s.homography_topic) if s.input_kind == 'homography'
+                                         else (CameraInfo, s.camera_info_topic))
+        geometry = self.create_subscription(geometry_type, s.topic(geometry_topic, view),
+                                            lambda m: self._add(view, 'geometry', m, m), 10)
+
+        def subscribe_images():
+            qos = qos_by_name(s.qos)
+            if s.image_kind in ('raw', 'both'):
+                self.create_subscription(Image, s.topic(s.image_topic, view),
+                                         lambda m: self._add(view, 'image', m, (msg_to_image, m)), qos)
+            if s.image_kind in ('compressed', 'both'):
+                self.create_subscription(CompressedImage, s.topic(s.compressed_topic, view),
+                                         lambda m: self._add(view, 'image', m, (compressed_to_image, m)), qos)
+        return SubscribeWhenConnected(self, view, [geometry], subscribe_images)
 
     def _start_fresh(self) -> None:
         """New synchroniser, no tracks, no temporal features."""

@@ -3,7 +3,9 @@
 Per view ``V`` in ``views`` (several drones per process; one per namespace works too):
 
 - subscribes ``/V/<image_topic>`` (sensor_msgs/Image, or CompressedImage on ``/V/image/compressed`` when
-  ``compressed``), and ``/V/<camera_info_topic>`` when no ``reference_dataset`` is configured;
+  ``compressed``), and ``/V/<camera_info_topic>`` when no ``reference_dataset`` is configured (the
+  images are then subscribed once that stream has a publisher, so that no CameraInfo is lost at start-up:
+  ``matrix_ros.connect``);
 - publishes ``/V/homography`` (matrix_msgs/HomographyStamped, with the image's header stamp) and
   ``/diagnostics`` (diagnostic_msgs/DiagnosticArray: status, confidence, inliers, reference, re-keying).
 
@@ -31,6 +33,7 @@ from matrix_core.register.backends import make_backend
 from matrix_core.register.registrar import Registrar
 from matrix_core.register.scene import settings_for_dataset
 from matrix_core.register.settings import RegisterSettings
+from matrix_ros.connect import SubscribeWhenConnected
 from matrix_ros.conversions import ConversionError, camera_info_to_camera, compressed_to_image, msg_to_image
 from matrix_ros.params import declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
@@ -90,7 +93,7 @@ class RegisterNode(Node):
         self.settings = s = declare_settings(self, RegisterNodeSettings, defaults)
         cv2.setNumThreads(s.threads)
         self.backend = make_backend(s)
-        self.registrars, self.pubs = {}, {}
+        self.registrars, self.pubs, self.connections = {}, {}, {}
         self.camera_infos = {v: {} for v in s.views}  # view -> {stamp key: CameraInfo}
         self.pending = {v: {} for v in s.views}  # view -> {stamp key: (msg, image)} waiting for a CameraInfo
         self.area = tuple(s.area)
@@ -110,19 +113,30 @@ class RegisterNode(Node):
                     raise DatasetError(f'cannot decode reference image {path}')
                 self.registrars[view] = Registrar(s, image, dataset.reference_camera(view), self.area,
                                                   f'{view}/reference', self.backend)
-            else:
-                self.create_subscription(CameraInfo, f'/{view}/{s.camera_info_topic}',
-                                         lambda m, v=view: self._on_camera_info(v, m), 10)
-            if s.compressed:
-                self.create_subscription(CompressedImage, f'/{view}/image/compressed',
-                                         lambda m, v=view: self._on_image(v, m, compressed_to_image), qos)
-            else:
-                self.create_subscription(Image, f'/{view}/{s.image_topic}',
-                                         lambda m, v=view: self._on_image(v, m, msg_to_image), qos)
+            self._subscribe_view(view, qos, needs_camera_info=dataset is None)
             self.pubs[view] = self.create_publisher(HomographyStamped, f'/{view}/homography', publisher_qos())
         self.diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', publisher_qos())
         self.get_logger().info(f'registering {s.views} with backend {self.backend.name} at scale {s.scale}; '
                                f'reference: {s.reference_dataset or "first frame with CameraInfo"}')
+
+    def _subscribe_view(self, view: str, qos, needs_camera_info: bool) -> None:
+        """The view's images; without a reference dataset they wait for its CameraInfo stream to connect
+        (its first CameraInfo makes the reference: matrix_ros.connect)."""
+        s = self.settings
+
+        def subscribe_images():
+            if s.compressed:
+                self.create_subscription(CompressedImage, f'/{view}/image/compressed',
+                                         lambda m: self._on_image(view, m, compressed_to_image), qos)
+            else:
+                self.create_subscription(Image, f'/{view}/{s.image_topic}',
+                                         lambda m: self._on_image(view, m, msg_to_image), qos)
+        if not needs_camera_info:
+            subscribe_images()
+            return
+        info = self.create_subscription(CameraInfo, f'/{view}/{s.camera_info_topic}',
+                                        lambda m: self._on_camera_info(view, m), 10)
+        self.connections[view] = SubscribeWhenConnected(self, view, [info], subscribe_images)
 
     def _on_camera_info(self, view: str, msg: CameraInfo) -> None:
         if view in self.registrars:

@@ -1,0 +1,46 @@
+"""Subscribe a node's frame stream only once the streams that complete each frame are connected.
+
+Why: a reliable, volatile subscription gets only what is published after its publisher has matched it,
+and matching between two processes can take seconds on a loaded machine. A fuse node that already
+receives a drone's images while that drone's homography publisher has not matched it yet loses the
+frame's homography for good (a lockstep replay then waits for that frame until it times out). When the
+images are subscribed only after the homography stream has a matched publisher, whoever waits for the
+image subscription (the player's ``wait_for_subscribers``) also waits for the homography connection.
+Images without their geometry are of no use to these nodes, so nothing is lost by subscribing later.
+"""
+
+from typing import Callable
+
+from rclpy.clock import Clock, ClockType
+
+
+class SubscribeWhenConnected:
+    """Calls ``subscribe()`` once every subscription in ``needs`` has at least one matched publisher.
+
+    ``name`` labels the log lines (e.g. the view). The check runs on a steady-clock timer every ``period_s``
+    (sim time may stand still while a player waits); the timer is destroyed once ``subscribe`` ran.
+    """
+
+    def __init__(self, node, name: str, needs: list, subscribe: Callable[[], None], period_s: float = 0.1):
+        self.node, self.name, self.needs, self.subscribe = node, name, list(needs), subscribe
+        self.connected, self.announced = False, False
+        self.timer = node.create_timer(period_s, self._check, clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self._check()
+
+    def _check(self) -> None:
+        if self.connected:
+            return
+        waiting = [s.topic_name for s in self.needs if s.get_publisher_count() < 1]
+        if waiting:
+            if not self.announced:
+                self.announced = True
+                self.node.get_logger().info(f'{self.name}: waiting for a publisher on {", ".join(waiting)} '
+                                            'before subscribing its images')
+            return
+        self.connected = True
+        self.subscribe()
+        if self.timer is not None:
+            self.node.destroy_timer(self.timer)
+            self.timer = None
+        self.node.get_logger().info(f'{self.name}: {", ".join(s.topic_name for s in self.needs)} connected; '
+                                    'images subscribed')
