@@ -240,3 +240,27 @@ def test_hidden_boards_are_not_tracked(dataset, scene):
     assert r.status == STALE and not r.tracked and 'detect' in r.timings_s
     assert r.motion.startswith('homography (')
     assert r.camera is cal.last_good
+
+
+def test_an_opencv_error_in_one_frame_leaves_the_calibrator_working(dataset, scene, monkeypatch):
+    """An OpenCV assertion inside one frame's calibration (injected into the board search) gives that frame
+    a stale result with the reason, and the next frame calibrates normally."""
+    import matrix_core.calib.tracker as tracker_module
+
+    view = 'D5'
+    cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view),
+                          cv2.imread(str(dataset.reference_image_path(view))))
+    assert cal.process(dataset.load_image(view, 0), 0.0).status == OK
+    real_find_pieces = tracker_module.find_pieces
+
+    def asserting_find_pieces(*args, **kwargs):
+        raise cv2.error('injected: (-215:Assertion failed) in function find_pieces')
+
+    monkeypatch.setattr(tracker_module, 'find_pieces', asserting_find_pieces)
+    r = cal.process(dataset.load_image(view, 1), 0.5)
+    assert r.status == STALE and 'OpenCV error' in r.message and r.camera is cal.last_good
+    monkeypatch.setattr(tracker_module, 'find_pieces', real_find_pieces)
+    r = cal.process(dataset.load_image(view, 2), 1.0)
+    assert r.status == OK
+    rot, centre = pose_errors(r.camera, dataset.camera(view, 2))
+    assert rot < 0.1 and centre < 0.03

@@ -198,10 +198,16 @@ class DroneCalibrator:
         width, height = self.scene.image_size
         if gray.shape[:2] != (height, width):
             raise ValueError(f'image is {gray.shape[1]}x{gray.shape[0]}, intrinsics are for {width}x{height}')
-        timings = {}
         if self.prior is None:
             return CalibResult(FAILED, None, message='no pose prior (configure an initial pose)')
+        try:
+            return self._calibrate(gray, stamp, t_start)
+        except cv2.error as exc:   # an OpenCV assertion on one odd frame must not end the drone's calibration
+            return self._stale(stamp, f'OpenCV error, frame skipped: {str(exc).strip().splitlines()[-1]}')
 
+    def _calibrate(self, gray: np.ndarray, stamp: float, t_start: float) -> CalibResult:
+        s = self.settings
+        timings = {}
         motion_data = self._motion_data(gray)
         track = s.track_corners and not self.prior_is_initial and self.tracked_in_a_row < s.track_max_frames
         cur_H_prev, motion_how, homography = self._image_motion(motion_data, s.track_matcher if track else '')
