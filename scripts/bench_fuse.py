@@ -29,7 +29,7 @@ from sensor_msgs.msg import CompressedImage, Image
 from std_msgs.msg import Header
 from tqdm import tqdm
 
-from matrix_core.bev.lifting import pixel_scale_homography
+from matrix_core.geometry.homography import pixel_scale_homography
 from matrix_core.datasets import open_dataset
 from matrix_ros.conversions import image_to_compressed, image_to_msg, seconds_to_stamp, stamp_to_seconds
 from matrix_ros.qos import qos_by_name

@@ -264,3 +264,18 @@ def test_an_opencv_error_in_one_frame_leaves_the_calibrator_working(dataset, sce
     assert r.status == OK
     rot, centre = pose_errors(r.camera, dataset.camera(view, 2))
     assert rot < 0.1 and centre < 0.03
+
+
+@pytest.mark.slow
+def test_the_half_resolution_whole_image_search_recovers_drone_7(dataset, scene):
+    """D7's boards are not where its first priors put them: the rectified search finds nothing and the
+    whole-image search (at full_search_scale 0.5, a third of the full-resolution time) finds the pieces
+    that give frame 2 an accurate pose."""
+    view = 'D7'
+    cal = DroneCalibrator(scene, CalibSettings(full_search_scale=0.5), dataset.reference_camera(view),
+                          cv2.imread(str(dataset.reference_image_path(view))))
+    results = [cal.process(dataset.load_image(view, frame), 0.5 * k) for k, frame in enumerate(dataset.frames[:3])]
+    assert all(r.full_search for r in results)
+    assert results[2].status == OK, results[2].message
+    rot, centre = pose_errors(results[2].camera, dataset.camera(view, dataset.frames[2]))
+    assert rot < 0.1 and centre < 0.03

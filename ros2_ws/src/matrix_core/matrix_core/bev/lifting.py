@@ -12,11 +12,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-
-def pixel_scale_homography(sx: float, sy: float) -> np.ndarray:
-    """``big_H_small`` for pixel-centre coordinates when 1 small pixel = (sx, sy) big pixels:
-    u_big = (u_small + 0.5) * sx - 0.5."""
-    return np.array([[sx, 0.0, 0.5 * sx - 0.5], [0.0, sy, 0.5 * sy - 0.5], [0.0, 0.0, 1.0]])
+from matrix_core.geometry.homography import pixel_scale_homography
 
 
 def orient_ground_homography(img_H_ground: np.ndarray, image_size: tuple) -> np.ndarray:

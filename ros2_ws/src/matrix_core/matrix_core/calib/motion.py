@@ -24,12 +24,6 @@ class Features:
     descriptors: np.ndarray
 
 
-def _scale_matrix(scale: float) -> np.ndarray:
-    """full-resolution pixel-centre coordinates -> coordinates in an image resized by ``scale``."""
-    off = 0.5 * scale - 0.5
-    return np.array([[scale, 0.0, off], [0.0, scale, off], [0.0, 0.0, 1.0]])
-
-
 class GroundMotion:
     """ORB features at ``scale`` of the full image and the homography between two frames' features."""
 

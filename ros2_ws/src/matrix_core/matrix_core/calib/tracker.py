@@ -35,6 +35,7 @@ from matrix_core.calib.regions import board_rectification, image_H_board, image_
 from matrix_core.calib.scene import CalibScene
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.geometry.camera import Camera, rotation_angle_deg
+from matrix_core.geometry.homography import pixel_scale_homography
 
 OK, STALE, FAILED = 'ok', 'stale', 'failed'
 GROW_SHIFT = 4  # largest whole-square correction considered (the initial prior can be squares off)
@@ -243,7 +244,9 @@ class DroneCalibrator:
                                       s.refine_subpixel, s.detect_accuracy)
         full_search = not pieces and s.full_search
         if full_search:
-            pieces = find_pieces(gray, None, None, s.pattern_size,
+            scale, (width, height) = s.full_search_scale, self.scene.image_size
+            img_H_search = None if scale == 1 else pixel_scale_homography(1.0 / scale, 1.0 / scale)
+            pieces = find_pieces(gray, img_H_search, (round(width * scale), round(height * scale)), s.pattern_size,
                                  s.max_pieces_per_board * len(self.scene.boards), refine=False,
                                  accuracy=s.detect_accuracy)
         timings['detect'] = time.perf_counter() - t

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from matrix_core.geometry.homography import pixel_scale_homography
+
 # Below this, a homography is numerically singular (its inverse would invent geometry).
 _MIN_RCOND = 1e-12
 
@@ -87,6 +89,4 @@ def jpeg_reduction(full_size: tuple, input_size: tuple) -> int:
 def at_reduced_resolution(img_H_ground: np.ndarray, r: int) -> np.ndarray:
     """``img_H_ground`` of the full image -> the same for the image decoded at 1/r (pixel centres:
     u_small = (u_full + 0.5) / r - 0.5)."""
-    from matrix_core.bev.lifting import pixel_scale_homography
-
     return pixel_scale_homography(1.0 / r, 1.0 / r) @ img_H_ground   # small_H_full

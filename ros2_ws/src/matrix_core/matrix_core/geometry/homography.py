@@ -13,6 +13,12 @@ import numpy as np
 from matrix_core.geometry.checks import as_matrix, as_points
 
 
+def pixel_scale_homography(sx: float, sy: float) -> np.ndarray:
+    """``big_H_small`` for pixel-centre coordinates when 1 small pixel = (sx, sy) big pixels:
+    u_big = (u_small + 0.5) * sx - 0.5 (``sx`` < 1 maps big pixels to small ones)."""
+    return np.array([[sx, 0.0, 0.5 * sx - 0.5], [0.0, sy, 0.5 * sy - 0.5], [0.0, 0.0, 1.0]])
+
+
 def apply_homography(a_H_b: np.ndarray, points_b) -> np.ndarray:
     """Map points through a homography.
 
