@@ -6,11 +6,11 @@ Status of each result:
       reprojection error); ``camera`` is the last good pose and ``age_s`` says how old it is;
     - ``failed``: no good pose yet (since the start); ``camera`` is None, nothing to publish.
 
-Tracked frame (``track_corners``, after a good frame whose ORB ground homography to this one succeeded, with the
-faster ``track_matcher``): the board corners that homography predicts give a pose, which ``grow`` refines
-(several rounds), verifies and corrects like a detected one; when that pose passes every check below, the
-checkerboard search is skipped. Otherwise (the homography is measured again with ``motion_matcher``), and
-always for the first frame:
+Tracked frame (opt-in ``track_corners``, after a good frame whose ORB ground homography to this one succeeded,
+with the faster ``track_matcher``, at most ``track_max_frames`` in a row): the board corners that homography
+predicts give a pose, which ``grow`` refines (several rounds), verifies and corrects like a detected one;
+when that pose passes every check below, the checkerboard search is skipped. Otherwise (the homography is
+measured again with ``motion_matcher``), and always for the first frame:
 
 One frame: ORB ground homography from the prior's image (``motion``) -> each board predicted and searched
 in a rectified view (``regions``, ``detection``) -> corners named (``assignment``) -> RANSAC/LM PnP
