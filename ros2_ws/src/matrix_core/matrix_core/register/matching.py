@@ -40,8 +40,10 @@ def match_symmetric(desc_a: np.ndarray, desc_b: np.ndarray, ratio: float = 0.8,
         (M, 2) int array of index pairs (i into a, j into b), sorted by i.
     """
     ab, ab1, ab2 = _knn2(desc_a, desc_b, method)
-    ba, ba1, ba2 = _knn2(desc_b, desc_a, method)
     i = np.flatnonzero((ab >= 0) & (ab1 < ratio * ab2))
-    j = ab[i]
-    keep = (ba[j] == i) & (ba1[j] < ratio * ba2[j])
-    return np.stack([i[keep], j[keep]], axis=1).astype(np.int64).reshape(-1, 2)
+    # The way back is needed only from the b features that some a feature chose (fewer queries, same pairs).
+    chosen = np.unique(ab[i])
+    ba, ba1, ba2 = _knn2(np.asarray(desc_b)[chosen], desc_a, method)
+    k = np.searchsorted(chosen, ab[i])
+    keep = (ba[k] == i) & (ba1[k] < ratio * ba2[k])
+    return np.stack([i[keep], ab[i][keep]], axis=1).astype(np.int64).reshape(-1, 2)
