@@ -73,7 +73,7 @@ def test_ground_motion_of_both_matchers_predicts_the_boards(dataset, scene):
         err = np.linalg.norm(p[:, :2] / p[:, 2:] - truth.project(board.corners_world()), axis=1)
         seen = truth.in_image(truth.project(board.corners_world()))
         assert np.median(err[seen]) < 1.0, (matcher, np.median(err[seen]))
-    with pytest.raises(KeyError):
+    with pytest.raises(ValueError, match="matcher must be one of"):
         motion.homography(a, b, 'flann')
 
 

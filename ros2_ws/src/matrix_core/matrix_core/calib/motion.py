@@ -16,6 +16,13 @@ import cv2
 import numpy as np
 
 
+# LSH: about 35 ms instead of 100-150 ms for 3000 x 3000 binary descriptors, slightly worse priors
+# (its hash tables draw from OpenCV's RNG, which the tracker seeds per image).
+MATCHERS = {'lsh': lambda: cv2.FlannBasedMatcher(dict(algorithm=6, table_number=6, key_size=12, multi_probe_level=1),
+                                                 dict(checks=50)),
+            'brute': lambda: cv2.BFMatcher(cv2.NORM_HAMMING)}
+
+
 @dataclass
 class Features:
     """ORB keypoints (K, 2) full-resolution pixels and (K, 32) uint8 descriptors of one image."""
@@ -31,14 +38,9 @@ class GroundMotion:
                  ransac_px: float = 2.0, min_inliers: int = 40, matcher: str = 'brute'):
         self.scale, self.ratio, self.ransac_px, self.min_inliers = scale, ratio, ransac_px, min_inliers
         self.orb = cv2.ORB_create(features, fastThreshold=10)
-        # LSH: about 35 ms instead of 100-150 ms for 3000 x 3000 binary descriptors, slightly worse priors
-        # (its hash tables draw from OpenCV's RNG, which the tracker seeds per image).
-        self.matchers = {'lsh': cv2.FlannBasedMatcher(dict(algorithm=6, table_number=6, key_size=12,
-                                                           multi_probe_level=1), dict(checks=50)),
-                         'brute': cv2.BFMatcher(cv2.NORM_HAMMING)}
-        if matcher not in self.matchers:
-            raise ValueError(f'matcher must be one of {sorted(self.matchers)}, got {matcher!r}')
-        self.matcher = matcher
+        if matcher not in MATCHERS:
+            raise ValueError(f'matcher must be one of {sorted(MATCHERS)}, got {matcher!r}')
+        self.matcher, self.matchers = matcher, {}
 
     def features(self, gray: np.ndarray) -> Features:
         """ORB features of an (H, W) uint8 image (found at ``scale``, returned in full-resolution pixels)."""
@@ -53,7 +55,12 @@ class GroundMotion:
         ('lsh' or 'brute') overrides the one given at construction."""
         if previous is None or len(previous.points) < 8 or len(current.points) < 8:
             return None, 0
-        pairs = self.matchers[matcher or self.matcher].knnMatch(previous.descriptors, current.descriptors, k=2)
+        name = matcher or self.matcher
+        if name not in MATCHERS:
+            raise ValueError(f'matcher must be one of {sorted(MATCHERS)}, got {name!r}')
+        if name not in self.matchers:   # made on first use: most trackers only ever use one
+            self.matchers[name] = MATCHERS[name]()
+        pairs = self.matchers[name].knnMatch(previous.descriptors, current.descriptors, k=2)
         good = [p[0] for p in pairs if len(p) == 2 and p[0].distance < self.ratio * p[1].distance]
         if len(good) < self.min_inliers:
             return None, len(good)

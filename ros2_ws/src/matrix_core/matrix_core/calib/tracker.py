@@ -61,6 +61,21 @@ class CalibResult:
     timings_s: dict = field(default_factory=dict)
 
 
+@dataclass
+class _Frame:
+    """One image while it is calibrated: (H, W) grey pixels, stamp (s), start time, the ORB features and
+    small image for the motion (:meth:`DroneCalibrator._motion_data`), stage timings (s)."""
+
+    gray: np.ndarray
+    stamp: float
+    t_start: float
+    motion_data: tuple = None
+    timings: dict = field(default_factory=dict)
+
+    def finish_timing(self) -> None:
+        self.timings['total'] = time.perf_counter() - self.t_start
+
+
 class DroneCalibrator:
     """Calibrates one drone's camera frame after frame.
 
@@ -202,38 +217,39 @@ class DroneCalibrator:
         if self.prior is None:
             return CalibResult(FAILED, None, message='no pose prior (configure an initial pose)')
         try:
-            return self._calibrate(gray, stamp, t_start)
+            return self._calibrate(_Frame(gray, stamp, t_start))
         except cv2.error as exc:   # an OpenCV assertion on one odd frame must not end the drone's calibration
             return self._stale(stamp, f'OpenCV error, frame skipped: {str(exc).strip().splitlines()[-1]}')
 
-    def _calibrate(self, gray: np.ndarray, stamp: float, t_start: float) -> CalibResult:
-        s = self.settings
-        timings = {}
-        motion_data = self._motion_data(gray)
+    def _calibrate(self, frame: _Frame) -> CalibResult:
+        s, timings, gray = self.settings, frame.timings, frame.gray
+        frame.motion_data = self._motion_data(gray)
         track = s.track_corners and not self.prior_is_initial and self.tracked_in_a_row < s.track_max_frames
-        cur_H_prev, motion_how, homography = self._image_motion(motion_data, s.track_matcher if track else '')
+        cur_H_prev, motion_how, homography = self._image_motion(frame.motion_data,
+                                                                s.track_matcher if track else '')
         t = time.perf_counter()
-        timings['motion'] = t - t_start
+        timings['motion'] = t - frame.t_start
         if track and homography:
             predicted = {b.name: image_H_board(self.prior, b, cur_H_prev) for b in self.scene.boards}
             camera = self._predicted_camera(predicted)
             grown, correction = self._grow(gray, camera, TRACK_ROUNDS) if camera is not None else (None, None)
             timings['track'] = time.perf_counter() - t
             if grown is not None:
-                result = self._verdict(grown, correction, stamp, motion_data, timings, t_start,
-                                       dict(tracked=True, motion=motion_how, timings_s=timings))
+                result = self._verdict(grown, correction, frame, dict(tracked=True, motion=motion_how,
+                                                                      timings_s=timings))
                 if result.status == OK:
                     return result
         if track and s.track_matcher != s.motion_matcher:   # the search deserves the better prior
             t = time.perf_counter()
-            cur_H_prev, motion_how, _ = self._image_motion(motion_data)
+            cur_H_prev, motion_how, _ = self._image_motion(frame.motion_data)
             timings['motion_again'] = time.perf_counter() - t
         predicted = {b.name: image_H_board(self.prior, b, cur_H_prev) for b in self.scene.boards}
-        return self._search(gray, stamp, predicted, cur_H_prev, motion_how, motion_data, timings, t_start)
+        return self._search(frame, predicted, cur_H_prev, motion_how)
 
-    def _search(self, gray, stamp, predicted, cur_H_prev, motion_how, motion_data, timings, t_start):
-        """The frame's pose from checkerboard pieces searched where ``predicted`` puts the boards."""
-        s = self.settings
+    def _search(self, frame: _Frame, predicted: dict, cur_H_prev, motion_how: str) -> CalibResult:
+        """The frame's pose from checkerboard pieces searched where ``predicted`` (board name -> (3, 3) image
+        pixels <- corner indices) puts the boards; ``cur_H_prev`` None when no image motion was measured."""
+        s, timings, gray, stamp = self.settings, frame.timings, frame.gray, frame.stamp
         t = time.perf_counter()
         margin = s.initial_margin_cells if (self.prior_is_initial or cur_H_prev is None) else s.margin_cells
         pieces = []
@@ -276,33 +292,33 @@ class DroneCalibrator:
         info['pieces_assigned'] = assigned
         t = time.perf_counter()
         if len(world) < s.min_corners:
-            timings['total'] = time.perf_counter() - t_start
+            frame.finish_timing()
             why = '; '.join(sorted(set(reasons))) or 'no board piece found'
             return self._stale(stamp, f'{len(world)} corners assigned (< {s.min_corners}): {why}',
                                corners=len(world), **info)
         fit = solve_pnp(np.array(world), np.array(uv), self.scene.camera(np.eye(4)), s.ransac_threshold_px)
         timings['pnp'] = time.perf_counter() - t
-        timings['total'] = time.perf_counter() - t_start
+        frame.finish_timing()
         if fit is None:
             return self._stale(stamp, 'PnP failed', corners=len(world), **info)
         correction = (0, 0)
         if s.grow_corners and fit.inliers.sum() >= s.min_corners:
             grown, correction = self._grow(gray, fit.camera)
             if correction is None:
-                timings['total'] = time.perf_counter() - t_start
+                frame.finish_timing()
                 return self._stale(stamp, 'ambiguous board position: the board edges that would decide it '
                                    'are out of view', corners=int(fit.inliers.sum()), **info)
             if grown is not None:
                 fit = grown
             else:
                 correction = (0, 0)
-        return self._verdict(fit, correction, stamp, motion_data, timings, t_start, info)
+        return self._verdict(fit, correction, frame, info)
 
-    def _verdict(self, fit, correction, stamp, motion_data, timings, t_start, info) -> CalibResult:
+    def _verdict(self, fit, correction: tuple, frame: _Frame, info: dict) -> CalibResult:
         """Accept ``fit`` (a PnPResult, grid-corrected by ``correction`` squares) as this frame's pose when it
         is plausible, and make it the next prior; otherwise the stale result saying why."""
-        s = self.settings
-        timings['total'] = time.perf_counter() - t_start
+        s, stamp = self.settings, frame.stamp
+        frame.finish_timing()
         n_in = int(fit.inliers.sum())
         info = dict(info, corners=n_in, rms_px=fit.rms_px)
         if n_in < s.min_corners:
@@ -317,7 +333,7 @@ class DroneCalibrator:
             return self._stale(stamp, f'implausible jump {move_m:.2f} m / {turn_deg:.1f} deg from the prior',
                                **info)
         self.prior = self.last_good = fit.camera
-        self.previous_features, self.previous_small = motion_data
+        self.previous_features, self.previous_small = frame.motion_data
         self.last_good_stamp = stamp
         self.prior_is_initial = False
         self.tracked_in_a_row = self.tracked_in_a_row + 1 if info.get('tracked') else 0
