@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from matrix_core.datasets import MatrixDataset
+from matrix_core.geometry.homography import implied_camera
 from matrix_core.register.evaluate import gt_cur_to_ref, homography_error_px
 from matrix_core.register.fit import fit_homography
-from matrix_core.register.gate import check_registration, ground_polygon, implied_camera, shape_tolerance
+from matrix_core.register.gate import check_registration, ground_polygon, shape_tolerance
 from matrix_core.register.ground_mask import visible_ground_grid
 from matrix_core.register.registrar import Registrar
 from matrix_core.register.settings import MATRIX_BLOCK, RegisterSettings

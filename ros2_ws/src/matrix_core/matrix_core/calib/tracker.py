@@ -34,13 +34,14 @@ from matrix_core.calib.motion import GroundMotion
 from matrix_core.calib.regions import board_rectification, image_H_board, image_shift, small_gray, translation
 from matrix_core.calib.scene import CalibScene
 from matrix_core.calib.settings import CalibSettings
-from matrix_core.geometry.camera import Camera, rotation_angle_deg
-from matrix_core.geometry.homography import pixel_scale_homography
+from matrix_core.geometry.camera import Camera, pose_matrix, rotation_angle_deg
+from matrix_core.geometry.homography import implied_camera, pixel_scale_homography
 
 OK, STALE, FAILED = 'ok', 'stale', 'failed'
 GROW_SHIFT = 4  # largest whole-square correction considered (the initial prior can be squares off)
 TRACK_ROUNDS = 5  # at most this many poses re-solved from the saddles they verify, from the predicted corners
 SETTLED_DEG, SETTLED_M = 0.03, 0.015  # a re-solved pose this close to the last one has settled
+REGISTRATION_SHAPE_ERROR = 0.05  # a registration homography further from a rigid camera is not used
 
 
 @dataclass
@@ -70,6 +71,7 @@ class _Frame:
     stamp: float
     t_start: float
     motion_data: tuple = None
+    guide: Camera = None   # the camera this frame's registration implies, if any
     timings: dict = field(default_factory=dict)
 
     def finish_timing(self) -> None:
@@ -98,17 +100,15 @@ class DroneCalibrator:
         self.last_good_stamp = None
         self.motion = GroundMotion(settings.motion_scale, settings.motion_features, matcher=settings.motion_matcher) \
             if settings.motion_scale > 0 else None
-        self.previous_features = None
-        self.previous_small = None
-        if initial_image is not None:
-            self._remember(self._gray(initial_image))
+        self.previous_features = self.previous_small = None
+        self.previous_gray = None if initial_image is None else self._gray(initial_image)
 
-    def _remember(self, gray: np.ndarray):
-        """Keep what the next frame needs to measure the image motion (features of the prior's image)."""
-        if self.motion is not None:
-            self.previous_features = self.motion.features(gray)
-        if self.settings.global_shift_scale > 0:
-            self.previous_small = small_gray(gray, self.settings.global_shift_scale)
+    def _previous_motion_data(self) -> None:
+        """Measure the prior's image for the motion now that a frame needs it (kept as a grey image till then:
+        frames guided by a registration never need it)."""
+        if self.previous_gray is not None:
+            self.previous_features, self.previous_small = self._motion_data(self.previous_gray)
+            self.previous_gray = None
 
     def _motion_data(self, gray: np.ndarray) -> tuple:
         """(ORB features or None, small grey image or None) of this image, for the motion from the prior's."""
@@ -122,6 +122,7 @@ class DroneCalibrator:
         image's ``motion_data`` (ORB ``matcher``, '' = ``motion_matcher``).
 
         "prev" is the image the prior pose belongs to (the last good frame, or the reference image)."""
+        self._previous_motion_data()
         features, small = motion_data
         H, how = None, 'none'
         if features is not None and self.previous_features is not None:
@@ -203,8 +204,13 @@ class DroneCalibrator:
             count, previous = verified, fit.camera
         return None, None   # not reached
 
-    def process(self, image: np.ndarray, stamp: float) -> CalibResult:
-        """Calibrate from one (H, W, 3) BGR or (H, W) grey uint8 image taken at ``stamp`` seconds."""
+    def process(self, image: np.ndarray, stamp: float, img_H_ground: np.ndarray = None) -> CalibResult:
+        """Calibrate from one (H, W, 3) BGR or (H, W) grey uint8 image taken at ``stamp`` seconds.
+
+        ``img_H_ground`` (3, 3), optional: this image's homography from the ground (z = 0, world metres) to
+        its pixels, e.g. the inverse of the drone's registration ``H_img_to_ground``. When it implies a rigid
+        camera with these intrinsics, that camera predicts the boards (a prior independent of earlier
+        frames) and the image motion is not measured."""
         s = self.settings
         t_start = time.perf_counter()
         # Every RANSAC below draws from OpenCV's global RNG: seeding it per image makes the result depend on
@@ -217,44 +223,75 @@ class DroneCalibrator:
         if self.prior is None:
             return CalibResult(FAILED, None, message='no pose prior (configure an initial pose)')
         try:
-            return self._calibrate(_Frame(gray, stamp, t_start))
+            return self._calibrate(_Frame(gray, stamp, t_start), img_H_ground)
         except cv2.error as exc:   # an OpenCV assertion on one odd frame must not end the drone's calibration
             return self._stale(stamp, f'OpenCV error, frame skipped: {str(exc).strip().splitlines()[-1]}')
 
-    def _calibrate(self, frame: _Frame) -> CalibResult:
-        s, timings, gray = self.settings, frame.timings, frame.gray
-        frame.motion_data = self._motion_data(gray)
+    def _registered_camera(self, img_H_ground) -> tuple:
+        """(Camera or None, how): the rigid camera a registration's ground homography implies."""
+        if img_H_ground is None:
+            return None, ''
+        H = np.asarray(img_H_ground, dtype=np.float64)
+        if H.shape != (3, 3) or not np.all(np.isfinite(H)) or abs(np.linalg.det(H)) < 1e-12:
+            return None, 'registration homography unusable; '
+        implied = implied_camera(self.scene.K, H)
+        if implied.shape_error > REGISTRATION_SHAPE_ERROR:
+            return None, f'registration not a rigid camera (shape error {implied.shape_error:.3f}); '
+        return self.scene.camera(pose_matrix(implied.R, implied.t)), 'registration'
+
+    def _calibrate(self, frame: _Frame, img_H_ground) -> CalibResult:
+        s, timings = self.settings, frame.timings
+        guide, guide_how = self._registered_camera(img_H_ground)
+        if guide is not None:
+            frame.guide = guide
+            timings['motion'] = time.perf_counter() - frame.t_start
+            predicted = {b.name: image_H_board(guide, b) for b in self.scene.boards}
+            if s.track_registered:   # no drift: every registration is to the same reference
+                result = self._track(frame, predicted, guide_how)
+                if result is not None:
+                    return result
+            return self._search(frame, predicted, guide, False, guide_how)
+        frame.motion_data = self._motion_data(frame.gray)
         track = s.track_corners and not self.prior_is_initial and self.tracked_in_a_row < s.track_max_frames
         cur_H_prev, motion_how, homography = self._image_motion(frame.motion_data,
                                                                 s.track_matcher if track else '')
-        t = time.perf_counter()
-        timings['motion'] = t - frame.t_start
+        motion_how = guide_how + motion_how
+        timings['motion'] = time.perf_counter() - frame.t_start
         if track and homography:
-            predicted = {b.name: image_H_board(self.prior, b, cur_H_prev) for b in self.scene.boards}
-            camera = self._predicted_camera(predicted)
-            grown, correction = self._grow(gray, camera, TRACK_ROUNDS) if camera is not None else (None, None)
-            timings['track'] = time.perf_counter() - t
-            if grown is not None:
-                result = self._verdict(grown, correction, frame, dict(tracked=True, motion=motion_how,
-                                                                      timings_s=timings))
-                if result.status == OK:
-                    return result
+            result = self._track(frame, {b.name: image_H_board(self.prior, b, cur_H_prev) for b in self.scene.boards},
+                                 motion_how)
+            if result is not None:
+                return result
         if track and s.track_matcher != s.motion_matcher:   # the search deserves the better prior
             t = time.perf_counter()
             cur_H_prev, motion_how, _ = self._image_motion(frame.motion_data)
+            motion_how = guide_how + motion_how
             timings['motion_again'] = time.perf_counter() - t
         predicted = {b.name: image_H_board(self.prior, b, cur_H_prev) for b in self.scene.boards}
-        return self._search(frame, predicted, cur_H_prev, motion_how)
+        return self._search(frame, predicted, self.prior, self.prior_is_initial or cur_H_prev is None, motion_how)
 
-    def _search(self, frame: _Frame, predicted: dict, cur_H_prev, motion_how: str) -> CalibResult:
+    def _track(self, frame: _Frame, predicted: dict, how: str):
+        """The OK result of the board corners ``predicted`` puts in the image, refined and verified without a
+        checkerboard search (``track_corners``), or None when that pose fails a check."""
+        t = time.perf_counter()
+        camera = self._predicted_camera(predicted)
+        grown, correction = self._grow(frame.gray, camera, TRACK_ROUNDS) if camera is not None else (None, None)
+        frame.timings['track'] = time.perf_counter() - t
+        if grown is None:
+            return None
+        result = self._verdict(grown, correction, frame, dict(tracked=True, motion=how, timings_s=frame.timings))
+        return result if result.status == OK else None
+
+    def _search(self, frame: _Frame, predicted: dict, prior: Camera, rough: bool, motion_how: str) -> CalibResult:
         """The frame's pose from checkerboard pieces searched where ``predicted`` (board name -> (3, 3) image
-        pixels <- corner indices) puts the boards; ``cur_H_prev`` None when no image motion was measured."""
+        pixels <- corner indices) puts the boards; ``prior`` the pose they were predicted from, ``rough`` when
+        that prediction can be metres off (wider search and naming margins)."""
         s, timings, gray, stamp = self.settings, frame.timings, frame.gray, frame.stamp
         t = time.perf_counter()
-        margin = s.initial_margin_cells if (self.prior_is_initial or cur_H_prev is None) else s.margin_cells
+        margin = s.initial_margin_cells if rough else s.margin_cells
         pieces = []
         for board in self.scene.boards:
-            rect = board_rectification(predicted[board.name], board, self.prior, s.px_per_square, margin)
+            rect = board_rectification(predicted[board.name], board, prior, s.px_per_square, margin)
             if rect is not None:
                 pieces += find_pieces(gray, rect[0], rect[1], s.pattern_size, s.max_pieces_per_board,
                                       s.refine_subpixel, s.detect_accuracy)
@@ -274,9 +311,9 @@ class DroneCalibrator:
         world, uv, reasons, assigned = [], [], [], 0
         used = set()
         predicted_ij = {name: np.linalg.inv(H) for name, H in predicted.items()}
-        max_index_error = s.max_index_error * (4.0 if (self.prior_is_initial or cur_H_prev is None) else 1.0)
+        max_index_error = s.max_index_error * (4.0 if rough else 1.0)
         for piece in pieces:
-            a, why = assign_piece(piece, self.scene.boards, predicted_ij, self.prior, smooth, max_index_error,
+            a, why = assign_piece(piece, self.scene.boards, predicted_ij, prior, smooth, max_index_error,
                                   s.ambiguity_ratio, s.index_separation, max(jump_deg, s.max_prior_rotation_deg),
                                   2.0 * s.max_reprojection_px)
             if a is None:
@@ -332,8 +369,16 @@ class DroneCalibrator:
         if move_m > jump_m or turn_deg > jump_deg:
             return self._stale(stamp, f'implausible jump {move_m:.2f} m / {turn_deg:.1f} deg from the prior',
                                **info)
+        if frame.guide is not None:
+            apart_m = float(np.linalg.norm(fit.camera.center - frame.guide.center))
+            if apart_m > s.registration_agreement_m:
+                return self._stale(stamp, f'{apart_m:.2f} m from the camera the registration implies '
+                                          f'(> {s.registration_agreement_m})', **info)
         self.prior = self.last_good = fit.camera
-        self.previous_features, self.previous_small = frame.motion_data
+        if frame.motion_data is None:   # measured only if the next frame needs it
+            self.previous_gray, self.previous_features, self.previous_small = frame.gray, None, None
+        else:
+            self.previous_gray, (self.previous_features, self.previous_small) = None, frame.motion_data
         self.last_good_stamp = stamp
         self.prior_is_initial = False
         self.tracked_in_a_row = self.tracked_in_a_row + 1 if info.get('tracked') else 0

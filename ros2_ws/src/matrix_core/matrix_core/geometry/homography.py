@@ -8,6 +8,8 @@ like the transforms ``a_T_b``. Frames used in this project:
 - ``grid``: BEV cell indices (column, row) of a :class:`~matrix_core.geometry.grid.BevGrid`.
 """
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from matrix_core.geometry.checks import as_matrix, as_points
@@ -55,6 +57,38 @@ def ground_homography(K: np.ndarray, cam_T_world: np.ndarray, plane_z: float = 0
     R, t = cam_T_world[:3, :3], cam_T_world[:3, 3]
     # A point (x, y, z0) maps to R[:, 0] x + R[:, 1] y + (R[:, 2] z0 + t).
     return K @ np.column_stack([R[:, 0], R[:, 1], R[:, 2] * plane_z + t])
+
+
+@dataclass(frozen=True)
+class ImpliedCamera:
+    """Rigid camera recovered from a ground homography with known K.
+
+    Attributes:
+        R: (3, 3) world -> camera rotation (re-orthonormalised); t: (3,) translation.
+        center: (3,) camera centre in world metres.
+        shape_error: deviation of ``K^-1 H`` from two orthonormal columns (0 for an exact camera).
+    """
+
+    R: np.ndarray
+    t: np.ndarray
+    center: np.ndarray
+    shape_error: float
+
+
+def implied_camera(K: np.ndarray, img_H_ground: np.ndarray) -> ImpliedCamera:
+    """Decompose a (3, 3) ground -> pixel homography into the rigid camera it implies (intrinsics ``K``)."""
+    M = np.linalg.solve(K, img_H_ground)
+    n1, n2 = np.linalg.norm(M[:, 0]), np.linalg.norm(M[:, 1])
+    shape_error = max(abs(1.0 - n1 / n2), abs(M[:, 0] @ M[:, 1]) / (n1 * n2))
+    M = M / np.sqrt(n1 * n2)
+    if M[2, 2] < 0:  # the ground must be in front of the camera: its origin-ray depth t_z > 0 ...
+        M = -M
+    r1, r2 = M[:, 0], M[:, 1]
+    R = np.column_stack([r1, r2, np.cross(r1, r2)])
+    U, _, Vt = np.linalg.svd(R)
+    R = U @ Vt
+    t = M[:, 2]
+    return ImpliedCamera(R, t, -R.T @ t, float(shape_error))
 
 
 def normalized(H: np.ndarray) -> np.ndarray:

@@ -13,44 +13,10 @@ image's implied ``img_H_ground = inv(H_cur_to_ref) @ ref_img_H_ground``:
 4. agreement with the previous frame: the implied camera centre moves at most ``max_step_m`` per frame.
 """
 
-from dataclasses import dataclass
-
 import cv2
 import numpy as np
 
-from matrix_core.geometry.homography import apply_homography
-
-
-@dataclass(frozen=True)
-class ImpliedCamera:
-    """Rigid camera recovered from a ground homography with known K.
-
-    Attributes:
-        R: (3, 3) world -> camera rotation (re-orthonormalised); t: (3,) translation.
-        center: (3,) camera centre in world metres.
-        shape_error: deviation of ``K^-1 H`` from two orthonormal columns (0 for an exact camera).
-    """
-
-    R: np.ndarray
-    t: np.ndarray
-    center: np.ndarray
-    shape_error: float
-
-
-def implied_camera(K: np.ndarray, img_H_ground: np.ndarray) -> ImpliedCamera:
-    """Decompose a (3, 3) ground -> pixel homography into the rigid camera it implies (intrinsics ``K``)."""
-    M = np.linalg.solve(K, img_H_ground)
-    n1, n2 = np.linalg.norm(M[:, 0]), np.linalg.norm(M[:, 1])
-    shape_error = max(abs(1.0 - n1 / n2), abs(M[:, 0] @ M[:, 1]) / (n1 * n2))
-    M = M / np.sqrt(n1 * n2)
-    if M[2, 2] < 0:  # the ground must be in front of the camera: its origin-ray depth t_z > 0 ...
-        M = -M
-    r1, r2 = M[:, 0], M[:, 1]
-    R = np.column_stack([r1, r2, np.cross(r1, r2)])
-    U, _, Vt = np.linalg.svd(R)
-    R = U @ Vt
-    t = M[:, 2]
-    return ImpliedCamera(R, t, -R.T @ t, float(shape_error))
+from matrix_core.geometry.homography import apply_homography, implied_camera
 
 
 def polygon_area(pts: np.ndarray) -> float:
