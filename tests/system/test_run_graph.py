@@ -57,6 +57,9 @@ def test_whole_graph_on_the_real_sample(matrix_sample, node_executable, tmp_path
     with Reader(rec) as reader:
         counts = {c.topic: c.msgcount for c in reader.connections}
     assert counts['/D1/homography'] == counts['/D5/homography'] == 5 and counts['/tracks'] == 5
+    # calib followed each drone's registration: every image guided by it, no board search
+    assert sorted(_calib_guides(rec)) == sorted((v, 1.0 + 0.5 * i, 'registration', 'True')
+                                                for v in VIEWS for i in range(5))
     scores = tmp_path / 'live.json'
     assert cli(['evaluate-recording', str(rec), '--ground-truth', str(bag), '--json', str(scores)]) == 0
     live = json.loads(scores.read_text())
@@ -68,6 +71,21 @@ def test_bad_settings_fail_clearly(node_executable, tmp_path):
     run = subprocess.run([str(node_executable('matrix_bringup', 'run_graph')), '--bag', str(tmp_path / 'none'),
                           '--dataset', str(tmp_path)], capture_output=True, text=True, timeout=60)
     assert run.returncode == 2 and 'not a rosbag2 folder' in run.stderr, run.stderr
+
+
+def _calib_guides(recording) -> list:
+    """(view, stamp, guide, tracked) of every calib status on the recorded /diagnostics."""
+    from rosbags.highlevel import AnyReader
+    found = []
+    with AnyReader([recording]) as reader:
+        for conn, _, raw in reader.messages([c for c in reader.connections if c.topic == '/diagnostics']):
+            msg = reader.deserialize(raw, conn.msgtype)
+            for status in msg.status:
+                if status.name.startswith('calib/'):
+                    values = {kv.key: kv.value for kv in status.values}
+                    stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+                    found.append((status.hardware_id, round(stamp, 3), values.get('guide'), values.get('tracked')))
+    return found
 
 
 def _node_processes() -> dict:

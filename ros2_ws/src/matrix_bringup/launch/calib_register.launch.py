@@ -32,7 +32,7 @@ def generate_launch_description():
     nodes = [
         Node(package='matrix_calib', executable='calib', name='calib', output='screen',
              parameters=[{'views': views, 'config': LaunchConfiguration('calib_config'),
-                          'prior_dataset': dataset, 'qos': 'reliable'}]),
+                          'prior_dataset': dataset, 'qos': 'reliable', 'use_registration': True}]),
         Node(package='matrix_register', executable='register', name='register', output='screen',
              parameters=[{'views': views, 'reference_dataset': dataset}]),
         Node(package='matrix_bringup', executable='graph_monitor', name='graph_monitor', output='screen',
