@@ -4,12 +4,14 @@
 In deployment each drone has its own computer running its calib and register nodes; at the dataset's
 2 Hz that computer keeps up when calib + register take at most 0.5 s per frame on average. This runs
 both cores (matrix_core.calib.DroneCalibrator, matrix_core.register.Registrar, default settings, one
-OpenCV / torch thread) frame after frame for every drone of a MATRIX folder and prints per folder the
+OpenCV / torch thread; each frame registered first, and its registration guiding the calibration, as in the
+graph) frame after frame for every drone of a MATRIX folder and prints per folder the
 time per frame of each and of both (median, mean, p95, max) and whether the mean keeps up.
 
     python scripts/bench_drone.py                                   # real sample + simulated complex 1080p
     python scripts/bench_drone.py --dataset DIR [--dataset DIR2 ..]  # MATRIX folders with reference/
     python scripts/bench_drone.py --sim-frames 0                     # real sample only
+    python scripts/bench_drone.py --no-registration-prior            # calib measures the image motion itself
     python scripts/bench_drone.py --track_corners true               # any CalibSettings flag
 """
 
@@ -93,8 +95,9 @@ def main() -> int:
                         '--sim-variants at 1920x1080 (seed 7) and run them (0 = off)')
     parser.add_argument('--sim-variants', nargs='+', default=['complex'], choices=['simple', 'complex', 'modified'],
                         help='simulator variants run with --sim-frames')
-    parser.add_argument('--registration-prior', action='store_true', help="calib's board prediction from the "
-                        "frame's registration (as the calib node with use_registration:=true), not the image motion")
+    parser.add_argument('--registration-prior', action=argparse.BooleanOptionalAction, default=True,
+                        help="calib's board prediction from the frame's registration, as the graph runs it (calib "
+                        'node use_registration:=true); --no-registration-prior: from the image motion')
     add_settings_arguments(parser, CalibSettings)   # e.g. --track_corners true; the config follows each folder
     args = parser.parse_args()
     calib_settings = settings_from_namespace(CalibSettings, args)
