@@ -34,6 +34,8 @@ def test_per_drone_graph_has_one_calib_and_register_per_drone(settings):
                                                                                          'bag_player']
     calib = nodes[0]
     assert calib.parameters['views'] == ['D1'] and calib.parameters['compressed'] is True
+    # calib follows the registration, waiting for it as long as the player waits for a frame (lockstep)
+    assert calib.parameters['use_registration'] is True and calib.parameters['registration_wait_s'] == 120.0
     assert calib.parameters['config'].endswith('matrix_sample.yaml')   # not a simulated folder
     assert all(n.parameters.get('use_sim_time') for n in nodes if n.executable != 'bag_player')
     fuse = next(n for n in nodes if n.name == 'fuse')
@@ -48,6 +50,9 @@ def test_per_drone_graph_has_one_calib_and_register_per_drone(settings):
     free = graph_nodes(settings(lockstep=False, sync_timeout=2.0), FACTS)
     assert next(n for n in free if n.name == 'fuse').parameters['sync_timeout'] == 2.0
     assert 'lockstep_topic' not in free[-1].parameters and free[-1].parameters['lockstep'] is False
+    assert 'registration_wait_s' not in free[0].parameters   # the node's default: a live drone is not waited for
+    own = graph_nodes(settings(calib_registration=False), FACTS)[0].parameters
+    assert own['use_registration'] is False and 'registration_wait_s' not in own
 
 
 def test_drones_split_over_processes(settings):
@@ -111,6 +116,34 @@ class _OpaqueFunction(_Recorded):
         return self.kwargs['function'](context)
 
 
+class _Node(_Recorded):
+    """launch_ros.actions.Node: keyword arguments only; parameters a list of file paths and dicts whose values
+    launch_ros can normalise (launch_ros.utilities.normalize_parameters: str, bool, int, float, or a list of
+    them, all str, all bool or all numbers; None is a TypeError there)."""
+
+    KEYWORDS = {'executable', 'package', 'name', 'namespace', 'exec_name', 'parameters', 'remappings',
+                'ros_arguments', 'arguments', 'output'}
+
+    def __init__(self, *args, **kwargs):
+        assert not args and set(kwargs) <= self.KEYWORDS, (args, set(kwargs) - self.KEYWORDS)
+        for entry in kwargs.get('parameters') or []:
+            if isinstance(entry, dict):
+                for key, value in entry.items():
+                    assert _launch_parameter_ok(value), (kwargs['executable'], key, value)
+            else:
+                assert isinstance(entry, str) and Path(entry).is_file(), entry
+        super().__init__(**kwargs)
+
+
+def _launch_parameter_ok(value) -> bool:
+    if isinstance(value, (str, bool, int, float)):
+        return True
+    if not isinstance(value, (list, tuple)) or not value:
+        return False
+    kinds = {bool if isinstance(v, bool) else (float if isinstance(v, (int, float)) else type(v)) for v in value}
+    return len(kinds) == 1 and kinds <= {str, bool, float}
+
+
 def _load_launch_file(monkeypatch):
     modules = {name: types.ModuleType(name) for name in
                ('launch', 'launch.actions', 'launch.substitutions', 'launch_ros', 'launch_ros.actions')}
@@ -119,7 +152,7 @@ def _load_launch_file(monkeypatch):
         setattr(modules['launch.actions'], name, type(name, (_Recorded,), {}))
     modules['launch.actions'].OpaqueFunction = _OpaqueFunction
     modules['launch.substitutions'].LaunchConfiguration = _LaunchConfiguration
-    modules['launch_ros.actions'].Node = type('Node', (_Recorded,), {})
+    modules['launch_ros.actions'].Node = _Node
     for name, module in modules.items():
         monkeypatch.setitem(sys.modules, name, module)
     spec = importlib.util.spec_from_file_location('full_graph_launch', LAUNCH)
@@ -133,6 +166,7 @@ def test_launch_file_starts_the_graph_nodes(monkeypatch, tmp_path):
 
     sim = tmp_path / 'sim'
     assert cli(['simulate', '--config', 'simple', '--frames', '2', '--fast', '--bag', '--out', str(sim)]) == 0
+    assert _launch_parameter_ok([1, 2.5]) and not any(map(_launch_parameter_ok, ([], None, ['a', 1], {'a': 1})))
     description = _load_launch_file(monkeypatch).generate_launch_description()
     declared = {a.args[0]: a.kwargs for a in description.args[0] if type(a).__name__ == 'DeclareLaunchArgument'}
     fields = {name: (default, help_text) for name, _, default, help_text in settings_fields(GraphSettings)}
