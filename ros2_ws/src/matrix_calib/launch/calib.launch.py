@@ -23,11 +23,15 @@ def generate_launch_description():
                                           'intrinsics (empty = config only)'),
         DeclareLaunchArgument('qos', default_value='sensor_data',
                               description='image subscription QoS: sensor_data or reliable'),
+        DeclareLaunchArgument('use_registration', default_value='false',
+                              description="let each drone's registration (/V/homography from register) guide "
+                                          'its calibration: about 5x less calib time'),
     ]
     node = Node(
         package='matrix_calib', executable='calib', name='calib', output='screen',
         parameters=[{'config': LaunchConfiguration('config'), 'views': LaunchConfiguration('views'),
                      'prior_dataset': LaunchConfiguration('prior_dataset'),
                      'compressed': LaunchConfiguration('compressed'), 'qos': LaunchConfiguration('qos'),
-                     'intrinsics_topic': LaunchConfiguration('intrinsics_topic')}])
+                     'intrinsics_topic': LaunchConfiguration('intrinsics_topic'),
+                     'use_registration': LaunchConfiguration('use_registration')}])
     return LaunchDescription(args + [node])
