@@ -41,6 +41,7 @@ from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.calib.tracker import FAILED, OK, DroneCalibrator
 from matrix_core.datasets import DatasetError, MatrixDataset
+from matrix_core.fusion.views import img_H_ground_from_registration
 from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
 from matrix_ros.connect import SubscribeWhenConnected
 from matrix_ros.conversions import (ConversionError, camera_to_camera_info, camera_to_pose,
@@ -195,7 +196,7 @@ class CalibNode(Node):
                                           'calibrated from the image motion')
             else:
                 try:
-                    img_H_ground = np.linalg.inv(np.array(registration.h_img_to_ground, dtype=np.float64).reshape(3, 3))
+                    img_H_ground = img_H_ground_from_registration(registration.h_img_to_ground)
                 except (ValueError, np.linalg.LinAlgError) as exc:   # the calibrator says why it is not used
                     self.get_logger().error(f'{view}: t={frame.stamp:.3f} s: registration homography unusable: {exc}')
                     img_H_ground = np.full((3, 3), np.nan)

@@ -255,20 +255,19 @@ class DroneCalibrator:
         track = s.track_corners and not self.prior_is_initial and self.tracked_in_a_row < s.track_max_frames
         cur_H_prev, motion_how, homography = self._image_motion(frame.motion_data,
                                                                 s.track_matcher if track else '')
-        motion_how = guide_how + motion_how
         timings['motion'] = time.perf_counter() - frame.t_start
         if track and homography:
             result = self._track(frame, {b.name: image_H_board(self.prior, b, cur_H_prev) for b in self.scene.boards},
-                                 motion_how)
+                                 guide_how + motion_how)
             if result is not None:
                 return result
         if track and s.track_matcher != s.motion_matcher:   # the search deserves the better prior
             t = time.perf_counter()
             cur_H_prev, motion_how, _ = self._image_motion(frame.motion_data)
-            motion_how = guide_how + motion_how
             timings['motion_again'] = time.perf_counter() - t
         predicted = {b.name: image_H_board(self.prior, b, cur_H_prev) for b in self.scene.boards}
-        return self._search(frame, predicted, self.prior, self.prior_is_initial or cur_H_prev is None, motion_how)
+        return self._search(frame, predicted, self.prior, self.prior_is_initial or cur_H_prev is None,
+                            guide_how + motion_how)
 
     def _track(self, frame: _Frame, predicted: dict, how: str):
         """The OK result of the board corners ``predicted`` puts in the image, refined and verified without a
