@@ -43,7 +43,7 @@ def bench(dataset, scale, repeat, settings):
     times, rot, ctr, statuses, stages, tracked = [], [], [], [], {}, 0
     for _ in range(repeat):
         for view in dataset.views:
-            ref = scaled(cv2.imread(str(dataset.reference_image_path(view))), scale)
+            ref = scaled(dataset.reference_image(view), scale)
             cal = DroneCalibrator(scene, settings, dataset.reference_camera(view), ref)
             for index, frame in enumerate(dataset.frames):
                 image = scaled(dataset.load_image(view, frame), scale)

@@ -53,7 +53,7 @@ def bench(root: Path, calib_settings: CalibSettings, registration_prior: bool) -
     calib_ms, register_ms, ok, tracked, registered, rot, centre = [], [], 0, 0, 0, [], []
     with tqdm(total=len(dataset.views) * len(dataset.frames), desc=root.name, unit='image', leave=False) as bar:
         for view in dataset.views:
-            reference = cv2.imread(str(dataset.reference_image_path(view)))
+            reference = dataset.reference_image(view)
             calibrator = DroneCalibrator(scene, calib_settings, dataset.reference_camera(view), reference)
             registrar = Registrar(register_settings, reference, dataset.reference_camera(view), dataset.area,
                                   f'{view}/reference')
@@ -62,7 +62,7 @@ def bench(root: Path, calib_settings: CalibSettings, registration_prior: bool) -
                 t = time.perf_counter()
                 r = registrar.register(image, frame)
                 register_ms.append(1000 * (time.perf_counter() - t))
-                guide = np.linalg.inv(r.H_img_to_ground) if registration_prior and r.ok else None
+                guide = np.linalg.inv(r.ground_H_img) if registration_prior and r.ok else None
                 t = time.perf_counter()
                 c = calibrator.process(image, PERIOD_S * index, guide)
                 calib_ms.append(1000 * (time.perf_counter() - t))

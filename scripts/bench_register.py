@@ -56,11 +56,11 @@ def bench(dataset, backend, scale, pairs, kornia_features) -> dict:
     rows, registrars = [], {}
     for view, frame in tqdm(pairs, desc=f'{backend} @ {scale:g}', unit='pair', leave=False):
         if view not in registrars:
-            ref_image = cv2.imread(str(dataset.reference_image_path(view)))
+            ref_image = dataset.reference_image(view)
             registrars[view] = Registrar(settings, ref_image, dataset.reference_camera(view), dataset.area,
                                          f'{view}/reference')
         r = registrars[view].register(dataset.load_image(view, frame), frame)
-        err = (homography_error_px(r.H_cur_to_ref, dataset.camera(view, frame), dataset.reference_camera(view),
+        err = (homography_error_px(r.ref_H_img, dataset.camera(view, frame), dataset.reference_camera(view),
                                    dataset.area, settings.exclude_boxes) if r.ok else float('nan'))
         rows.append((r.seconds, r.matches, r.inliers, r.confidence, err, r.ok))
     a = np.array(rows, dtype=float)

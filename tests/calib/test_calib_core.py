@@ -127,7 +127,7 @@ def test_saddle_map_corrects_a_pose_one_square_off(dataset, scene):
 def test_tracker_follows_drone_5(dataset, scene):
     """Reference pose as the first prior, then the previous result: every frame ok and accurate."""
     cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera('D5'),
-                          cv2.imread(str(dataset.reference_image_path('D5'))))
+                          dataset.reference_image('D5'))
     for index, frame in enumerate(dataset.frames):
         r = cal.process(dataset.load_image('D5', frame), 0.5 * index)
         assert r.status == OK, r.message
@@ -175,7 +175,7 @@ def test_acceptance_real_sample_all_drones(dataset, scene):
     rot, centre = [], []
     for view in dataset.views:
         cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view),
-                              cv2.imread(str(dataset.reference_image_path(view))))
+                              dataset.reference_image(view))
         for index, frame in enumerate(dataset.frames):
             r = cal.process(dataset.load_image(view, frame), 0.5 * index)
             if r.status == OK:
@@ -192,7 +192,7 @@ def test_results_do_not_depend_on_other_drones_in_the_process(dataset, scene):
     the calib node does) give identical poses."""
     def calibrator(view):
         return DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view),
-                               cv2.imread(str(dataset.reference_image_path(view))))
+                               dataset.reference_image(view))
     alone, shared, other = calibrator('D4'), calibrator('D4'), calibrator('D1')
     for frame in (1, 2):
         a = alone.process(dataset.load_image('D4', frame), frame)
@@ -207,7 +207,7 @@ def test_tracked_frames_skip_the_search_and_agree_with_it(dataset, scene):
     motion give the pose without any board search, as accurate as the searched pose; after
     track_max_frames tracked frames in a row the next one is searched again."""
     view = 'D5'
-    reference = cv2.imread(str(dataset.reference_image_path(view)))
+    reference = dataset.reference_image(view)
     tracked = DroneCalibrator(scene, CalibSettings(track_corners=True, track_max_frames=2), dataset.reference_camera(view),
                              reference)
     searched = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view), reference)
@@ -229,7 +229,7 @@ def test_hidden_boards_are_not_tracked(dataset, scene):
     corners: the frame falls back to the search and ends stale, with the last good pose."""
     view = 'D5'
     cal = DroneCalibrator(scene, CalibSettings(full_search=False, track_corners=True), dataset.reference_camera(view),
-                          cv2.imread(str(dataset.reference_image_path(view))))
+                          dataset.reference_image(view))
     assert cal.process(dataset.load_image(view, 0), 0.0).status == OK
     image = dataset.load_image(view, 1)
     truth = scene.camera(dataset.camera(view, 1).cam_T_world)
@@ -249,7 +249,7 @@ def test_an_opencv_error_in_one_frame_leaves_the_calibrator_working(dataset, sce
 
     view = 'D5'
     cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view),
-                          cv2.imread(str(dataset.reference_image_path(view))))
+                          dataset.reference_image(view))
     assert cal.process(dataset.load_image(view, 0), 0.0).status == OK
     real_find_pieces = tracker_module.find_pieces
 
@@ -273,7 +273,7 @@ def test_the_half_resolution_whole_image_search_recovers_drone_7(dataset, scene)
     that give frame 2 an accurate pose."""
     view = 'D7'
     cal = DroneCalibrator(scene, CalibSettings(full_search_scale=0.5), dataset.reference_camera(view),
-                          cv2.imread(str(dataset.reference_image_path(view))))
+                          dataset.reference_image(view))
     results = [cal.process(dataset.load_image(view, frame), 0.5 * k) for k, frame in enumerate(dataset.frames[:3])]
     assert all(r.full_search for r in results)
     assert results[2].status == OK, results[2].message

@@ -24,7 +24,7 @@ def dataset(matrix_sample):
 
 
 def _drone(dataset, view, settings=None):
-    reference = cv2.imread(str(dataset.reference_image_path(view)))
+    reference = dataset.reference_image(view)
     camera = dataset.reference_camera(view)
     register_settings, _ = settings_for_dataset(RegisterSettings(), dataset)
     return (DroneCalibrator(load_scene(), settings or CalibSettings(), camera, reference),
@@ -41,7 +41,7 @@ def test_every_real_frame_is_calibrated_from_its_registration(dataset):
             image = dataset.load_image(view, frame)
             registration = registrar.register(image, frame)
             assert registration.ok, (view, frame, registration.message)
-            r = calibrator.process(image, 0.5 * index, np.linalg.inv(registration.H_img_to_ground))
+            r = calibrator.process(image, 0.5 * index, np.linalg.inv(registration.ground_H_img))
             assert r.status == OK and r.tracked and r.motion == 'registration', (view, frame, r.message)
             assert 'detect' not in r.timings_s and calibrator.previous_features is None
             rot, centre = pose_errors(r.camera, dataset.camera(view, frame))
@@ -68,7 +68,7 @@ def test_a_pose_that_disagrees_with_the_registration_is_rejected(dataset):
         image = dataset.load_image('D5', 0)
         registration = registrar.register(image, 0)
         ground_T_moved = np.array([[1.0, 0.0, shift_m], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-        wrong = np.linalg.inv(registration.H_img_to_ground) @ np.linalg.inv(ground_T_moved)
+        wrong = np.linalg.inv(registration.ground_H_img) @ np.linalg.inv(ground_T_moved)
         r = calibrator.process(image, 0.0, wrong)
         assert r.status == FAILED and r.camera is None, r.message
         apart_m = float(r.message.split(' m from the camera the registration implies (> 0.3)')[0])

@@ -21,11 +21,11 @@ def _register_all(dataset, settings, views=None, frames=None):
     out = {}
     for view in views or dataset.views:
         ref = dataset.reference_camera(view)
-        registrar = Registrar(settings, cv2.imread(str(dataset.reference_image_path(view))), ref, dataset.area,
+        registrar = Registrar(settings, dataset.reference_image(view), ref, dataset.area,
                               f'{view}/reference')
         for frame in frames or dataset.frames:
             r = registrar.register(dataset.load_image(view, frame), frame)
-            err = (homography_error_px(r.H_cur_to_ref, dataset.camera(view, frame), ref, dataset.area,
+            err = (homography_error_px(r.ref_H_img, dataset.camera(view, frame), ref, dataset.area,
                                        settings.exclude_boxes) if r.ok else None)
             out[view, frame] = (r, err)
     return out
@@ -49,8 +49,8 @@ def test_default_backend_meets_the_acceptance_on_the_real_sample(matrix_sample):
         assert r.inliers >= settings.min_inliers and np.isfinite(r.inlier_error_px)
         # H_img_to_ground composes H_cur_to_ref with the reference's ground homography.
         ref = dataset.reference_camera(view)
-        np.testing.assert_allclose(r.H_img_to_ground / r.H_img_to_ground[2, 2],
-                                   (ref.ground_H_img() @ r.H_cur_to_ref) / (ref.ground_H_img() @ r.H_cur_to_ref)[2, 2],
+        np.testing.assert_allclose(r.ground_H_img / r.ground_H_img[2, 2],
+                                   (ref.ground_H_img() @ r.ref_H_img) / (ref.ground_H_img() @ r.ref_H_img)[2, 2],
                                    rtol=1e-9, atol=1e-12)
 
 
@@ -81,10 +81,10 @@ def test_an_image_without_features_fails_and_publishes_no_homography(matrix_samp
     dataset = MatrixDataset(matrix_sample)
     settings = RegisterSettings()
     ref = dataset.reference_camera('D1')
-    registrar = Registrar(settings, cv2.imread(str(dataset.reference_image_path('D1'))), ref, dataset.area)
+    registrar = Registrar(settings, dataset.reference_image('D1'), ref, dataset.area)
     blank = np.full((1080, 1920, 3), 128, np.uint8)
     r = registrar.register(blank, 0)
-    assert r.status == 'failed' and r.H_cur_to_ref is None and r.H_img_to_ground is None
+    assert r.status == 'failed' and r.ref_H_img is None and r.ground_H_img is None
     assert r.matches == 0 and r.confidence == 0.0 and r.message
     small = registrar.register(blank[:540, :960], 1)
     assert small.status == 'failed' and '960x540' in small.message
@@ -99,13 +99,13 @@ def test_rekeyed_registrar_returns_to_the_original_reference(matrix_sample):
     dataset = MatrixDataset(matrix_sample)
     ref = dataset.reference_camera('D2')
     settings = RegisterSettings(rekey_after=1, rekey_confidence=1.01, good_confidence=0.0, retry_reference_every=2)
-    registrar = Registrar(settings, cv2.imread(str(dataset.reference_image_path('D2'))), ref, dataset.area,
+    registrar = Registrar(settings, dataset.reference_image('D2'), ref, dataset.area,
                           'D2/reference')
 
     def register(frame):
         r = registrar.register(dataset.load_image('D2', frame), frame)
         assert r.ok, r.message
-        assert homography_error_px(r.H_cur_to_ref, dataset.camera('D2', frame), ref, dataset.area,
+        assert homography_error_px(r.ref_H_img, dataset.camera('D2', frame), ref, dataset.area,
                                    settings.exclude_boxes) < 1.5
         return r
 

@@ -25,7 +25,7 @@ NO_GATE = dict(gate_max_shape_error=1e9, gate_max_area_ratio=1e9, gate_max_heigh
 def _register(dataset, view, frame, **kwargs):
     settings = RegisterSettings(**kwargs)
     ref = dataset.reference_camera(view)
-    registrar = Registrar(settings, cv2.imread(str(dataset.reference_image_path(view))), ref, dataset.area)
+    registrar = Registrar(settings, dataset.reference_image(view), ref, dataset.area)
     return registrar.register(dataset.load_image(view, frame), frame), ref
 
 
@@ -36,15 +36,15 @@ def test_gate_rejects_a_facade_fit_on_a_corner_drone(matrix_sample):
     ungated, ref = _register(dataset, 'D7', 0, **FACADE, **NO_GATE)
     # The failure exists and the confidence does not show it.
     assert ungated.ok
-    error = homography_error_px(ungated.H_cur_to_ref, dataset.camera('D7', 0), ref, dataset.area, MATRIX_BLOCK)
+    error = homography_error_px(ungated.ref_H_img, dataset.camera('D7', 0), ref, dataset.area, MATRIX_BLOCK)
     assert error > 20.0, f'facade fit not reproduced (error {error:.1f} px)'
     assert ungated.confidence > 0.3 and ungated.inliers > 50
     gated, _ = _register(dataset, 'D7', 0, **FACADE)
     assert gated.status == 'failed' and gated.message.startswith('gate:')
-    assert gated.H_cur_to_ref is None and gated.H_img_to_ground is None
+    assert gated.ref_H_img is None and gated.ground_H_img is None
     # Even the loosest shape tolerance (a fit with only min_inliers inliers) rejects it.
     s = RegisterSettings()
-    shape = implied_camera(ref.K, np.linalg.solve(ungated.H_cur_to_ref, ref.img_H_ground())).shape_error
+    shape = implied_camera(ref.K, np.linalg.solve(ungated.ref_H_img, ref.img_H_ground())).shape_error
     assert shape > 1.5 * shape_tolerance(s.gate_max_shape_error, s.min_inliers, s.gate_shape_inliers), shape
 
 

@@ -14,7 +14,7 @@ def test_reference_keeps_ground_features_only(matrix_sample):
     cv2.setNumThreads(1)
     dataset = MatrixDataset(matrix_sample)
     cam = dataset.reference_camera('D1')
-    features = SiftBackend(0.25, 0.005).extract(cv2.imread(str(dataset.reference_image_path('D1'))), 16000)
+    features = SiftBackend(0.25, 0.005).extract(dataset.reference_image('D1'), 16000)
     ref = Reference('D1/reference', cam, features, dataset.area, True, 0.0, MATRIX_BLOCK)
     assert 100 < len(ref.features) < len(features)
     ground = cam.backproject_to_ground(ref.features.xy)

@@ -11,7 +11,7 @@ from matrix_core.register.overlay import registration_overlay, write_registratio
 def test_overlay_warps_the_current_image_onto_the_reference(matrix_sample, tmp_path):
     dataset = MatrixDataset(matrix_sample)
     ref_cam, cur_cam = dataset.reference_camera('D4'), dataset.camera('D4', 1)
-    reference = cv2.imread(str(dataset.reference_image_path('D4')))
+    reference = dataset.reference_image('D4')
     current = dataset.load_image('D4', 1)
     H = gt_cur_to_ref(cur_cam, ref_cam)
     small = cv2.resize(reference, (960, 540), interpolation=cv2.INTER_AREA).astype(float)

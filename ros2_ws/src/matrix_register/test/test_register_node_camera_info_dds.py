@@ -9,7 +9,6 @@ then three frames. The homographies are checked against the ground truth from th
 import subprocess
 import time
 
-import cv2
 import numpy as np
 import pytest
 import rclpy
@@ -58,7 +57,7 @@ def test_reference_from_camera_info_over_dds(matrix_sample, node_executable):
 
         image_pub.publish(image_to_msg(dataset.load_image(VIEW, 1), header(ORPHAN_S)))
         _spin_for(node, 1.0)
-        reference = cv2.imread(str(dataset.reference_image_path(VIEW)), cv2.IMREAD_COLOR)
+        reference = dataset.reference_image(VIEW)
         image_pub.publish(image_to_msg(reference, header(REFERENCE_S)))
         _spin_for(node, 1.0)  # the reference image is held until its CameraInfo comes
         info_pub.publish(camera_to_camera_info(ref_cam, header(REFERENCE_S)))

@@ -7,7 +7,7 @@ import numpy as np
 from rosbags.rosbag2 import Reader
 
 from matrix_core.bags import messages as m
-from matrix_core.bags import topics as t
+from matrix_core import topics as t
 
 
 @dataclass

@@ -5,7 +5,7 @@ from pathlib import Path
 from rosbags.rosbag2 import StoragePlugin, Writer
 
 from matrix_core.bags import messages as m
-from matrix_core.bags import topics as t
+from matrix_core import topics as t
 
 
 class SequenceBagWriter:

@@ -13,7 +13,7 @@ that view and frame: the view is then masked for that frame, nothing is invented
     - ``pnp_stale``: the same, also using ``stale`` frames (the calibrator's last good pose, as the live
       ``calib`` node republishes it);
     - ``registration``: ``DIR/registration/Drone{N}_{TTTT}.json`` of ``matrix-tracker register DATASET
-      --out DIR`` (``H_img_to_ground`` in the dataset's file frame, converted by ``matrix_conventions``);
+      --out DIR`` (read by ``register.file_frame``: the registration contract's file form);
       frames whose status is not ``ok`` are masked.
 """
 
@@ -21,10 +21,10 @@ import csv
 import json
 from pathlib import Path
 
-import numpy as np
 
 from matrix_core.datasets import matrix_conventions as conv
 from matrix_core.datasets.types import DatasetError
+from matrix_core.register.file_frame import registration_from_record
 
 
 def _from_cameras(camera_of):
@@ -96,14 +96,8 @@ def _registration(dataset, frames, calibration_dir):
         f = path / 'registration' / f'Drone{conv.drone_number(view)}_{frame:04d}.json'
         if not f.is_file():
             return None
-        record = json.loads(f.read_text())
-        H = record.get('H_img_to_ground')
-        if record.get('status') != 'ok' or H is None:
-            return None
-        ground_H_img = conv.ground_homography_from_file(np.asarray(H, dtype=np.float64))
-        if not np.isfinite(ground_H_img).all() or abs(np.linalg.det(ground_H_img)) < 1e-12:
-            return None
-        return np.linalg.inv(ground_H_img), size
+        registration = registration_from_record(json.loads(f.read_text()), str(f))
+        return (registration.img_H_ground, size) if registration.ok else None
     return homography_of
 
 

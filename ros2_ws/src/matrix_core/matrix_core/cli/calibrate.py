@@ -12,7 +12,6 @@ import csv
 import os
 from pathlib import Path
 
-import cv2
 from tqdm import tqdm
 
 from matrix_core.calib.evaluation import pose_errors, summarize_errors
@@ -44,7 +43,7 @@ def initial_prior(dataset: MatrixDataset, scene, view: str):
     """(prior camera, prior image or None): the reference calibration if present, else the config's."""
     if dataset.has_reference:
         try:
-            return dataset.reference_camera(view), cv2.imread(str(dataset.reference_image_path(view)))
+            return dataset.reference_camera(view), dataset.reference_image(view)
         except DatasetError:
             pass
     if view in scene.initial_poses:

@@ -20,7 +20,6 @@ checkerboarded with it, reference ground grid): the first frame of each drone al
 import json
 from pathlib import Path
 
-import cv2
 import numpy as np
 from tqdm import tqdm
 
@@ -28,7 +27,7 @@ from matrix_core.datasets import DatasetError, MatrixDataset, open_dataset
 from matrix_core.datasets import matrix_conventions as conv
 from matrix_core.register.backends import make_backend
 from matrix_core.register.evaluate import homography_error_px
-from matrix_core.register.file_frame import to_matrix_file_frame
+from matrix_core.register.file_frame import registration_to_record
 from matrix_core.register.overlay import write_registration_overlay
 from matrix_core.register.registrar import Registrar
 from matrix_core.register.scene import settings_for_dataset
@@ -53,11 +52,7 @@ def add_parser(subparsers) -> None:
 def _reference(dataset: MatrixDataset, view: str):
     """(image, camera, id) of the reference of ``view``: reference/ if present, else the first frame."""
     if dataset.has_reference:
-        path = dataset.reference_image_path(view)
-        image = cv2.imread(str(path), cv2.IMREAD_COLOR)
-        if image is None:
-            raise DatasetError(f'cannot decode reference image {path}')
-        return image, dataset.reference_camera(view), f'{view}/reference'
+        return dataset.reference_image(view), dataset.reference_camera(view), f'{view}/reference'
     first = dataset.frames[0]
     return dataset.load_image(view, first), dataset.camera(view, first), f'{view}/frame:{first}'
 
@@ -85,13 +80,10 @@ def run(args) -> int:
             for index, frame in enumerate(frames):
                 current = dataset.load_image(view, frame)
                 result = registrar.register(current, frame)
-                record = result.to_dict()
-                if result.ok:
-                    H_pix, H_ground = to_matrix_file_frame(result.H_cur_to_ref, result.H_img_to_ground)
-                    record['H_cur_to_ref'], record['H_img_to_ground'] = H_pix.tolist(), H_ground.tolist()
+                record = registration_to_record(result)
                 name = f'Drone{conv.drone_number(view)}_{frame:04d}.json'
                 (out / name).write_text(json.dumps(record, indent=1))
-                error = (homography_error_px(result.H_cur_to_ref, dataset.camera(view, frame), ref_cam,
+                error = (homography_error_px(result.ref_H_img, dataset.camera(view, frame), ref_cam,
                                              dataset.area, settings.exclude_boxes) if result.ok else None)
                 summary.append({'view': view, 'frame': frame, 'status': result.status, 'error_px': error,
                                 'confidence': result.confidence, 'inliers': result.inliers,
@@ -101,7 +93,7 @@ def run(args) -> int:
                              f'inliers' + (f', {error:.2f} px vs calibration' if error is not None else
                                            f' ({result.message})'))
                     write_registration_overlay(out / 'overlay' / name.replace('.json', '.png'), current, image,
-                                               result.H_cur_to_ref, ref_cam, dataset.area, title)
+                                               result.ref_H_img, ref_cam, dataset.area, title)
                 bar.update()
     errors = np.array([s['error_px'] for s in summary if s['error_px'] is not None])
     failed = sum(s['status'] != 'ok' for s in summary)

@@ -38,6 +38,14 @@ def numbered_stems(folder: Path, suffixes=IMAGE_EXTENSIONS) -> list:
     return sorted(int(p.stem) for p in folder.iterdir() if p.suffix.lower() in suffixes and p.stem.isdigit())
 
 
+def read_image(path) -> np.ndarray:
+    """(H, W, 3) uint8 BGR image of a file; :class:`DatasetError` naming the file if it cannot be decoded."""
+    img = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    if img is None:
+        raise DatasetError(f'cannot decode image {path}')
+    return img
+
+
 class MultiviewDataset(ABC):
     """A synchronised multi-camera pedestrian dataset, everything in the internal convention.
 
@@ -104,8 +112,4 @@ class MultiviewDataset(ABC):
 
     def load_image(self, view: str, frame: int) -> np.ndarray:
         """(H, W, 3) uint8 BGR image; raises :class:`DatasetError` if unreadable."""
-        path = self.image_path(view, frame)
-        img = cv2.imread(str(path), cv2.IMREAD_COLOR)
-        if img is None:
-            raise DatasetError(f'cannot decode image {path}')
-        return img
+        return read_image(self.image_path(view, frame))

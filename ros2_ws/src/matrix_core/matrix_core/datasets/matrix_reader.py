@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from matrix_core.datasets import matrix_conventions as conv
-from matrix_core.datasets.base import MultiviewDataset, find_image, image_size, numbered_stems
+from matrix_core.datasets.base import MultiviewDataset, find_image, image_size, numbered_stems, read_image
 from matrix_core.datasets.opencv_xml import read_matrices
 from matrix_core.datasets.types import BoundingBox, DatasetError, PersonAnnotation, PlaneCorrespondences
 from matrix_core.geometry.camera import Camera
@@ -127,6 +127,10 @@ class MatrixDataset(MultiviewDataset):
     def reference_image_path(self, view: str) -> Path:
         """Image of ``view`` at its reference pose (an empty scene in the real data)."""
         return find_image(self.root / 'reference/image_subsets' / view, '0000')
+
+    def reference_image(self, view: str) -> np.ndarray:
+        """(H, W, 3) BGR uint8 reference image of ``view``; :class:`DatasetError` if missing or undecodable."""
+        return read_image(self.reference_image_path(view))
 
     def reference_camera(self, view: str) -> Camera:
         """Calibration of the reference image of ``view``."""

@@ -15,7 +15,7 @@ import numpy as np
 from rosbags.highlevel import AnyReader
 
 from matrix_core.bags import read_bag
-from matrix_core.bags import topics as bag_topics
+from matrix_core import topics as bag_topics
 from matrix_core.metrics import BevPoints, detection_metrics, read_bev_points, tracking_metrics
 
 TRACK_ARRAY = 'matrix_msgs/msg/TrackArray'

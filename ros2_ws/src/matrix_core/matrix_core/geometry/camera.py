@@ -37,6 +37,22 @@ def invert_pose(a_T_b: np.ndarray) -> np.ndarray:
     return pose_matrix(R.T, -R.T @ t)
 
 
+def check_intrinsics(K, dist=None, size=None, what: str = 'intrinsics') -> np.ndarray:
+    """The one validity rule of intrinsics: ``K`` (3, 3) finite and non-singular, ``dist`` (N,) finite, ``size``
+    (w, h) positive. Returns K as float64 (3, 3); raises ValueError naming ``what`` and the fault."""
+    K = np.asarray(K, dtype=np.float64)
+    if K.size != 9 or not np.all(np.isfinite(K)):
+        raise ValueError(f'{what}: K has NaN/infinite values or is not 3x3')
+    K = K.reshape(3, 3)
+    if abs(np.linalg.det(K)) < 1e-9:
+        raise ValueError(f'{what}: K is singular')
+    if dist is not None and not np.all(np.isfinite(np.asarray(dist, dtype=np.float64))):
+        raise ValueError(f'{what}: distortion has NaN/infinite values')
+    if size is not None and min(int(size[0]), int(size[1])) <= 0:
+        raise ValueError(f'{what}: image size {size[0]}x{size[1]} is empty')
+    return K
+
+
 def rotation_angle_deg(R_a: np.ndarray, R_b: np.ndarray) -> float:
     """Angle in degrees of the relative rotation ``R_a^T R_b`` between two (3, 3) rotations."""
     cos = (np.trace(as_matrix(R_a, (3, 3), 'R_a').T @ as_matrix(R_b, (3, 3), 'R_b')) - 1.0) / 2.0
@@ -69,6 +85,23 @@ class Camera:
             raise ValueError('cam_T_world must hold a proper rotation (orthonormal, det +1)')
         if self.width <= 0 or self.height <= 0:
             raise ValueError(f'image size must be positive, got {self.width}x{self.height}')
+
+    @classmethod
+    def from_projection(cls, K, P, width: int, height: int, dist=None) -> 'Camera':
+        """Build from intrinsics ``K`` (3, 3) and a projection ``P = K [R | t]`` (3, 4; world -> pixels), as
+        CameraInfo carries them in this project; ``dist`` (<= 5,) is zero-padded. ValueError when K is not
+        valid (:func:`check_intrinsics`) or P is not ``K [R | t]`` with a proper rotation."""
+        K = check_intrinsics(K, dist, (width, height))
+        P = np.asarray(P, dtype=np.float64)
+        if P.size != 12 or not np.all(np.isfinite(P)):
+            raise ValueError('P has NaN/infinite values or is not 3x4')
+        Rt = np.linalg.solve(K, P.reshape(3, 4))
+        U, _, Vt = np.linalg.svd(Rt[:, :3])  # re-orthonormalise against float noise
+        R = U @ Vt
+        if np.linalg.det(R) < 0 or not np.allclose(R, Rt[:, :3], atol=1e-5):
+            raise ValueError('P is not K [R | t] with a proper rotation R')
+        d = [float(v) for v in (dist if dist is not None else [])][:5]
+        return cls(K, pose_matrix(R, Rt[:, 3]), int(width), int(height), np.array(d + [0.0] * (5 - len(d))))
 
     @classmethod
     def from_rvec_tvec(cls, K, rvec, tvec, width: int, height: int, dist=None) -> 'Camera':

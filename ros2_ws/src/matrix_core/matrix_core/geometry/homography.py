@@ -67,12 +67,14 @@ class ImpliedCamera:
         R: (3, 3) world -> camera rotation (re-orthonormalised); t: (3,) translation.
         center: (3,) camera centre in world metres.
         shape_error: deviation of ``K^-1 H`` from two orthonormal columns (0 for an exact camera).
+        K: (3, 3) the intrinsics it was recovered with.
     """
 
     R: np.ndarray
     t: np.ndarray
     center: np.ndarray
     shape_error: float
+    K: np.ndarray = None
 
 
 def implied_camera(K: np.ndarray, img_H_ground: np.ndarray) -> ImpliedCamera:
@@ -88,7 +90,7 @@ def implied_camera(K: np.ndarray, img_H_ground: np.ndarray) -> ImpliedCamera:
     U, _, Vt = np.linalg.svd(R)
     R = U @ Vt
     t = M[:, 2]
-    return ImpliedCamera(R, t, -R.T @ t, float(shape_error))
+    return ImpliedCamera(R, t, -R.T @ t, float(shape_error), np.array(K, dtype=np.float64))
 
 
 def normalized(H: np.ndarray) -> np.ndarray:

@@ -2,13 +2,13 @@
 
 Pipeline (one idea per module): ``backends`` (registry of feature backends: ``backend_sift``,
 ``backend_kornia``) -> ``matching`` (symmetric ratio test) -> ``fit`` (RANSAC/MAGSAC homography) ->
-``gate`` (physical sanity checks) -> ``result``; ``reference`` caches the reference's ground features
-(``ground_mask``; obstacles and ground extent from the dataset: ``scene``) and key frames; ``registrar``
-ties it together per drone; ``evaluate`` computes the acceptance error from the stored calibrations,
-``acceptance`` runs it over a whole folder; ``overlay`` draws the pictures.
+``gate`` (physical sanity checks) -> ``registration`` (the contract every consumer reads); ``reference``
+caches the reference's ground features (``ground_mask``; obstacles and ground extent from the dataset:
+``scene``) and key frames; ``registrar`` ties it together per drone; ``evaluate`` computes the acceptance
+error from the stored calibrations, ``acceptance`` runs it over a whole folder; ``overlay`` draws the pictures.
 """
 
-from matrix_core.register.result import RegistrationResult
+from matrix_core.register.registration import Registration, RegistrationError
 from matrix_core.register.settings import RegisterSettings
 
-__all__ = ['RegisterSettings', 'RegistrationResult']
+__all__ = ['RegisterSettings', 'Registration', 'RegistrationError']

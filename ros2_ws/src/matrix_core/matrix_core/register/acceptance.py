@@ -9,7 +9,6 @@ the same at every size.
 
 from dataclasses import replace
 
-import cv2
 import numpy as np
 from tqdm import tqdm
 
@@ -50,13 +49,13 @@ def acceptance_run(dataset, settings: RegisterSettings = None, views=None, frame
     with tqdm(total=len(views) * len(frames), desc='register', unit='pair', disable=not progress) as bar:
         for view in views:
             ref = dataset.reference_camera(view)
-            image = cv2.imread(str(dataset.reference_image_path(view)), cv2.IMREAD_COLOR)
+            image = dataset.reference_image(view)
             registrar = Registrar(settings, image, ref, dataset.area, f'{view}/reference', backend)
             for frame in frames:
                 r = registrar.register(dataset.load_image(view, frame), frame)
                 seconds.append(r.seconds)
                 if r.ok:
-                    errors.append(factor * homography_error_px(r.H_cur_to_ref, dataset.camera(view, frame), ref,
+                    errors.append(factor * homography_error_px(r.ref_H_img, dataset.camera(view, frame), ref,
                                                                dataset.area, settings.exclude_boxes))
                 else:
                     failed[f'{view}/{frame}'] = r.message

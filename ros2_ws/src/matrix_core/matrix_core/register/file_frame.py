@@ -1,12 +1,19 @@
-"""Homographies in a MATRIX folder's own file frame (raw image pixels, the calibration files' world).
+"""The file form of a :class:`~matrix_core.register.registration.Registration`: the JSON record that
+``matrix-tracker register`` writes per drone and frame, with its homographies in the MATRIX folder's own
+file frame (raw image pixels, the calibration files' world), so that any MATRIX tool reads them.
 
-The conversions themselves live in :mod:`matrix_core.datasets.matrix_conventions`; here they are only
-turned into the affine matrices that re-express a homography.
+Record keys: the scalar fields of the registration (``Registration.to_dict``) plus
+``H_cur_to_ref`` (3x3: raw current-image pixels -> raw reference-image pixels) and ``H_img_to_ground``
+(3x3: raw current-image pixels -> file world (x, y) metres on z = 0), both normalised to H[2, 2] = 1, or
+null when the registration failed. The point conversions live in
+:mod:`matrix_core.datasets.matrix_conventions`; here they are turned into the affine matrices that
+re-express a homography.
 """
 
 import numpy as np
 
 from matrix_core.datasets import matrix_conventions as conv
+from matrix_core.register.registration import STATUS_OK, Registration, RegistrationError, check_homography
 
 
 def _affine_of(fn) -> np.ndarray:
@@ -20,16 +27,36 @@ def _affine_of(fn) -> np.ndarray:
     return A
 
 
-def to_matrix_file_frame(H_cur_to_ref: np.ndarray, H_img_to_ground: np.ndarray):
-    """Internal homographies -> (H_cur_to_ref, H_img_to_ground) of the MATRIX files.
+def _normalised(H: np.ndarray) -> np.ndarray:
+    return H / H[2, 2]
 
-    Returns:
-        ``H_cur_to_ref`` (3, 3): raw file pixels of the current image -> raw file pixels of the reference;
-        ``H_img_to_ground`` (3, 3): raw file pixels -> the calibration files' world (x, y) metres on z = 0.
-        Both normalised to H[2, 2] = 1.
-    """
-    pix = _affine_of(conv.pixels_to_file)          # internal pixels -> file pixels
-    world = _affine_of(conv.world_to_file)         # internal ground metres -> file ground metres
-    H_pix = pix @ H_cur_to_ref @ np.linalg.inv(pix)
-    H_ground = world @ H_img_to_ground @ np.linalg.inv(pix)
-    return H_pix / H_pix[2, 2], H_ground / H_ground[2, 2]
+
+def registration_to_record(registration: Registration) -> dict:
+    """Registration (internal frames) -> JSON-ready record with the homographies in the file frame."""
+    record = registration.to_dict()
+    record['H_cur_to_ref'] = record['H_img_to_ground'] = None
+    if registration.ok:
+        pix = _affine_of(conv.pixels_to_file)          # internal pixels -> file pixels
+        world = _affine_of(conv.world_to_file)         # internal ground metres -> file ground metres
+        record['H_cur_to_ref'] = _normalised(pix @ registration.ref_H_img @ np.linalg.inv(pix)).tolist()
+        record['H_img_to_ground'] = _normalised(world @ registration.ground_H_img @ np.linalg.inv(pix)).tolist()
+    return record
+
+
+def registration_from_record(record: dict, where: str = 'record') -> Registration:
+    """A record of :func:`registration_to_record` -> Registration in internal frames. A record that says
+    ``ok`` but holds no usable homography comes back failed, saying why (``where`` names the file)."""
+    values = {k: record.get(k, d) for k, d in (('confidence', 0.0), ('matches', 0), ('inliers', 0),
+                                                ('reference_id', ''), ('backend', ''), ('seconds', 0.0))}
+    error = record.get('inlier_error_px')
+    values['inlier_error_px'] = float('nan') if error is None else float(error)
+    if record.get('status') != STATUS_OK:
+        return Registration.failed(record.get('message', '') or f'{where}: status {record.get("status")!r}', **values)
+    try:
+        ground = check_homography(conv.ground_homography_from_file(
+            check_homography(record.get('H_img_to_ground'), f'{where}: H_img_to_ground')), f'{where}: H_img_to_ground')
+        pix = _affine_of(conv.pixels_to_file)
+        ref = np.linalg.inv(pix) @ check_homography(record.get('H_cur_to_ref'), f'{where}: H_cur_to_ref') @ pix
+    except (RegistrationError, TypeError) as exc:
+        return Registration.failed(f'unusable record: {exc}', **values)
+    return Registration(STATUS_OK, _normalised(ref), _normalised(ground), message=record.get('message', ''), **values)

@@ -2,7 +2,7 @@
 
 A homography fitted to the buildings (facades) instead of the ground can have many inliers and a normal
 confidence, but the ground homography it implies is not that of a real camera. Checks, on the current
-image's implied ``img_H_ground = inv(H_cur_to_ref) @ ref_img_H_ground``:
+image's implied ``img_H_ground = inv(ref_H_img) @ ref_img_H_ground``:
 
 1. shape: ``K^-1 img_H_ground ~ [r1 r2 t]`` must have two orthonormal columns (a rigid camera with the
    reference's intrinsics K); deviation = max(|1 - |m1|/|m2||, |cos(m1, m2)|);
@@ -38,7 +38,7 @@ def shape_tolerance(max_shape_error: float, inliers, shape_inliers: int = 100) -
     return max_shape_error * float(np.sqrt(shape_inliers / max(int(inliers), 1)))
 
 
-def check_registration(H_cur_to_ref: np.ndarray, K: np.ndarray, ref_img_H_ground: np.ndarray,
+def check_registration(ref_H_img: np.ndarray, K: np.ndarray, ref_img_H_ground: np.ndarray,
                        ref_center: np.ndarray, ref_polygon: np.ndarray, previous_center=None,
                        frames_since_previous: int = 1, max_shape_error: float = 0.08,
                        max_area_ratio: float = 2.5, max_height_change_m: float = 4.0,
@@ -46,14 +46,14 @@ def check_registration(H_cur_to_ref: np.ndarray, K: np.ndarray, ref_img_H_ground
     """Run the gate. Returns (reason, implied camera): reason is '' when every check passes.
 
     Args:
-        H_cur_to_ref: (3, 3) current-image pixels -> reference-image pixels.
+        ref_H_img: (3, 3) current-image pixels -> reference-image pixels.
         K: (3, 3) intrinsics of the current image (assumed equal to the reference's).
         ref_img_H_ground: (3, 3) ground metres -> reference pixels.
         ref_center: (3,) reference camera centre; ref_polygon: (P, 2) reference pixels (:func:`ground_polygon`).
         previous_center: (3,) implied centre of the previous registered frame, or None.
         inliers: inliers of the fit (None: the shape tolerance is ``max_shape_error``, see :func:`shape_tolerance`).
     """
-    img_H_ground = np.linalg.solve(H_cur_to_ref, ref_img_H_ground)
+    img_H_ground = np.linalg.solve(ref_H_img, ref_img_H_ground)
     cam = implied_camera(K, img_H_ground)
     tolerance = shape_tolerance(max_shape_error, inliers, shape_inliers)
     if cam.shape_error > tolerance:
@@ -62,7 +62,7 @@ def check_registration(H_cur_to_ref: np.ndarray, K: np.ndarray, ref_img_H_ground
     if cam.center[2] <= 0 or abs(cam.center[2] - ref_center[2]) > max_height_change_m:
         return (f'gate: implied camera height {cam.center[2]:.2f} m vs reference {ref_center[2]:.2f} m '
                 f'(max change {max_height_change_m} m)'), cam
-    hom = np.c_[ref_polygon, np.ones(len(ref_polygon))] @ np.linalg.inv(H_cur_to_ref).T
+    hom = np.c_[ref_polygon, np.ones(len(ref_polygon))] @ np.linalg.inv(ref_H_img).T
     if not (np.all(hom[:, 2] > 0) or np.all(hom[:, 2] < 0)):
         return 'gate: the horizon of the warped ground polygon crosses it', cam
     ratio = polygon_area(hom[:, :2] / hom[:, 2:3]) / polygon_area(ref_polygon)

@@ -32,13 +32,13 @@ def _grid_lines(camera: Camera, area, step_m: float, samples: int = 60) -> list:
     return out
 
 
-def registration_overlay(current: np.ndarray, reference: np.ndarray, H_cur_to_ref, ref_camera: Camera, area,
+def registration_overlay(current: np.ndarray, reference: np.ndarray, ref_H_img, ref_camera: Camera, area,
                          title: str = '', scale: float = 0.5, tile_px: int = 64, grid_m: float = 1.0) -> np.ndarray:
     """(h, w, 3) BGR picture at ``scale`` of the reference image size.
 
     Args:
         current, reference: (H, W, 3) BGR images at full resolution.
-        H_cur_to_ref: (3, 3) current-image pixels -> reference-image pixels, or None (failed: only the
+        ref_H_img: (3, 3) current-image pixels -> reference-image pixels, or None (failed: only the
             reference and the title are drawn).
         ref_camera: reference calibration (its ground grid over ``area``, internal world metres, is drawn).
         tile_px: checkerboard tile size in output pixels: tiles alternate reference / warped current.
@@ -47,9 +47,9 @@ def registration_overlay(current: np.ndarray, reference: np.ndarray, H_cur_to_re
     h, w = round(reference.shape[0] * scale), round(reference.shape[1] * scale)
     ref_small = cv2.resize(reference, (w, h), interpolation=cv2.INTER_AREA)
     picture = (ref_small * 0.5).astype(np.uint8)
-    if H_cur_to_ref is not None:
-        warped = cv2.warpPerspective(current, S @ np.asarray(H_cur_to_ref, float), (w, h), flags=cv2.INTER_LINEAR)
-        covered = cv2.warpPerspective(np.full(current.shape[:2], 255, np.uint8), S @ np.asarray(H_cur_to_ref, float),
+    if ref_H_img is not None:
+        warped = cv2.warpPerspective(current, S @ np.asarray(ref_H_img, float), (w, h), flags=cv2.INTER_LINEAR)
+        covered = cv2.warpPerspective(np.full(current.shape[:2], 255, np.uint8), S @ np.asarray(ref_H_img, float),
                                       (w, h), flags=cv2.INTER_NEAREST) > 0
         rows, cols = np.indices((h, w))
         odd = ((rows // tile_px + cols // tile_px) % 2).astype(bool)

@@ -17,7 +17,7 @@ from matrix_core.register.fit import fit_homography
 from matrix_core.register.gate import check_registration
 from matrix_core.register.matching import match_symmetric
 from matrix_core.register.reference import Reference
-from matrix_core.register.result import STATUS_FAILED, STATUS_OK, RegistrationResult
+from matrix_core.register.registration import STATUS_FAILED, STATUS_OK, Registration
 from matrix_core.register.settings import RegisterSettings
 
 
@@ -49,7 +49,7 @@ class Registrar:
         self._frames_since_good = 1
         self._weak_streak = 0
         self._frames_on_key = 0  # frames registered since the last re-keying
-        self._last_good = None  # (frame_id, features, H_cur_to_ref)
+        self._last_good = None  # (frame_id, features, ref_H_img)
 
     @property
     def reference_id(self) -> str:
@@ -62,8 +62,8 @@ class Registrar:
             return self.reference.features, np.eye(3)
         return self.key.features, self.key.key_to_ref
 
-    def register(self, image: np.ndarray, frame_id='') -> RegistrationResult:
-        """Register one (H, W, 3) BGR current image; see :class:`RegistrationResult` for the output."""
+    def register(self, image: np.ndarray, frame_id='') -> Registration:
+        """Register one (H, W, 3) BGR current image; see :class:`Registration` for the output."""
         s = self.settings
         start = time.perf_counter()
         cam = self.reference.camera
@@ -90,14 +90,14 @@ class Registrar:
             result = replace(result, message=message)
         return replace(result, seconds=time.perf_counter() - start)
 
-    def reference_result(self) -> RegistrationResult:
+    def reference_result(self) -> Registration:
         """The result of the reference image itself (identity, exact by definition), for a caller that made
         a live image the reference. It does not seed the gate's previous camera centre: the reference may be
         from another time than the frames that follow."""
         n = len(self.reference.features)
         return self._result(STATUS_OK, np.eye(3), n, n, 0.0, time.perf_counter(), 'this image is the reference')
 
-    def _weak(self, result: RegistrationResult) -> bool:
+    def _weak(self, result: Registration) -> bool:
         return not result.ok or result.confidence < self.settings.rekey_confidence
 
     def _retry_due(self) -> bool:
@@ -120,7 +120,7 @@ class Registrar:
         return None
 
     def _attempt(self, cur: Features, target: Features, target_to_ref: np.ndarray, start,
-                 reference_id: str = None) -> RegistrationResult:
+                 reference_id: str = None) -> Registration:
         """Match ``cur`` to ``target`` (whose pixels map to the reference's by ``target_to_ref``), fit, gate."""
         s = self.settings
         cam = self.reference.camera
@@ -143,25 +143,25 @@ class Registrar:
             s.gate_max_height_change_m, s.gate_max_step_m, inliers, s.gate_shape_inliers)
         if reason:
             return self._result(STATUS_FAILED, None, *args, reason, reference_id)
-        return self._result(STATUS_OK, fit.H, *args, '', reference_id, implied.center)
+        return self._result(STATUS_OK, fit.H, *args, '', reference_id, implied)
 
     def _result(self, status, H, matches, inliers, error_px, start, message='', reference_id=None,
-                implied_center=None) -> RegistrationResult:
-        H_ground = None
+                implied=None) -> Registration:
+        ground_H_img = None
         if H is not None:
-            H_ground = self.reference.camera.ground_H_img() @ H
-            H_ground = H_ground / H_ground[2, 2]
-        return RegistrationResult(status, H, H_ground, inliers / matches if matches else 0.0, matches, inliers,
-                                  error_px, reference_id or self.reference_id, self.backend.name,
-                                  time.perf_counter() - start, message, implied_center)
+            ground_H_img = self.reference.camera.ground_H_img() @ H
+            ground_H_img = ground_H_img / ground_H_img[2, 2]
+        return Registration(status, H, ground_H_img, inliers / matches if matches else 0.0, matches, inliers,
+                            error_px, reference_id or self.reference_id, self.backend.name,
+                            time.perf_counter() - start, message, implied)
 
-    def _update_key(self, result: RegistrationResult, frame_id, cur: Features) -> str:
+    def _update_key(self, result: Registration, frame_id, cur: Features) -> str:
         """Track good frames; after ``rekey_after`` weak frames in a row, chain through the last good one."""
         s = self.settings
         self._frames_since_good = 1 if result.ok else self._frames_since_good + 1
         self._frames_on_key = self._frames_on_key + 1 if self.key is not None else 0
         if result.ok and result.confidence >= s.good_confidence:
-            self._last_good = (frame_id, cur, result.H_cur_to_ref)
+            self._last_good = (frame_id, cur, result.ref_H_img)
         self._weak_streak = self._weak_streak + 1 if self._weak(result) else 0
         if s.rekey_after and self._weak_streak >= s.rekey_after and self._last_good is not None:
             frame, features, H = self._last_good

@@ -1,0 +1,73 @@
+"""Topic names, message types and frame ids: the one stream convention of nodes, bags, player and recorder.
+
+Per-drone streams are RELATIVE names under the drone, ``<view>/<stream>`` (e.g. ``D3/image_raw``): a node
+in the root namespace resolves them to ``/D3/image_raw``, one started in a namespace (``--ros-args -r
+__ns:=/fleet``) to ``/fleet/D3/image_raw``, and each is remappable (``-r D3/image_raw:=/cam3/image``) as ROS
+users expect. A node that serves ONE drone from inside its namespace (``views`` empty) uses the bare
+stream name (``image_raw``). Bags store the absolute names of a root-namespace graph (:func:`absolute`).
+Graph-wide outputs (``tracks``, ``detections``, ...) are relative too; ``/diagnostics`` is absolute by ROS
+convention.
+"""
+
+WORLD_FRAME = 'world'
+DIAGNOSTICS_TOPIC = '/diagnostics'
+
+# Per-drone streams (relative to the drone).
+IMAGE_RAW = 'image_raw'
+IMAGE_COMPRESSED = 'image/compressed'
+CAMERA_INFO = 'camera_info'                      # calib's per-frame calibration
+POSE = 'pose'                                    # calib's camera pose
+HOMOGRAPHY = 'homography'                        # register's registration
+GROUND_TRUTH_CAMERA_INFO = 'ground_truth/camera_info'
+GROUND_TRUTH_POSE = 'ground_truth/pose'
+
+# Graph-wide streams.
+TRACKS = 'tracks'
+DETECTIONS = 'detections'
+MARKERS = 'markers'
+BEV_HEATMAP = 'bev_heatmap'
+PEDESTRIANS_TOPIC = '/ground_truth/pedestrians'
+PEDESTRIAN_IDS_TOPIC = '/ground_truth/pedestrian_ids'
+
+IMAGE_TYPE = 'sensor_msgs/msg/Image'
+COMPRESSED_TYPE = 'sensor_msgs/msg/CompressedImage'
+CAMERA_INFO_TYPE = 'sensor_msgs/msg/CameraInfo'
+POSE_TYPE = 'geometry_msgs/msg/PoseStamped'
+POSE_ARRAY_TYPE = 'geometry_msgs/msg/PoseArray'
+IDS_TYPE = 'std_msgs/msg/Int32MultiArray'
+HOMOGRAPHY_TYPE = 'matrix_msgs/msg/HomographyStamped'
+TRACK_ARRAY_TYPE = 'matrix_msgs/msg/TrackArray'
+
+
+def drone_topic(view: str, stream: str) -> str:
+    """Relative name of a drone's stream: ('D3', 'image_raw') -> 'D3/image_raw'; ('', s) -> s (the node is
+    inside the drone's namespace)."""
+    return f'{view}/{stream}' if view else stream
+
+
+def absolute(view: str, stream: str) -> str:
+    """The name a root-namespace graph (and a bag) uses: ('D3', 'image_raw') -> '/D3/image_raw'."""
+    return '/' + drone_topic(view, stream)
+
+
+def image_stream(compressed: bool) -> str:
+    return IMAGE_COMPRESSED if compressed else IMAGE_RAW
+
+
+def image_topic(view: str, compressed: bool = False) -> str:
+    """'/D1/image_raw' or '/D1/image/compressed' (bags)."""
+    return absolute(view, image_stream(compressed))
+
+
+def camera_info_topic(view: str) -> str:
+    """Ground-truth CameraInfo of a bag: '/D1/ground_truth/camera_info'."""
+    return absolute(view, GROUND_TRUTH_CAMERA_INFO)
+
+
+def pose_topic(view: str) -> str:
+    """Ground-truth pose of a bag: '/D1/ground_truth/pose'."""
+    return absolute(view, GROUND_TRUTH_POSE)
+
+
+def optical_frame(view: str) -> str:
+    return f'{view}/camera_optical'
