@@ -12,8 +12,8 @@ from matrix_core.cli.main import main as cli
 from matrix_core.datasets import open_dataset
 from matrix_core.fusion.fuser import BevFuser
 from matrix_core.fusion.settings import FuseSettings, shipped_checkpoint
-from matrix_core.fusion.views import (ViewInput, ViewInputError, at_reduced_resolution, img_H_ground_from_projection,
-                                      img_H_ground_from_registration, jpeg_reduction)
+from matrix_core.fusion.views import ViewInput, at_reduced_resolution, jpeg_reduction
+from matrix_core.register.registration import Registration, RegistrationError
 
 torch.set_num_threads(1)
 FRAMES = 4
@@ -50,7 +50,7 @@ def _live(sequence, model, make_view, settings=None):
 
 
 def _from_camera_info(dataset, view, frame):
-    return ViewInput(dataset.load_image(view, frame), img_H_ground_from_projection(dataset.camera(view, frame).P))
+    return ViewInput(dataset.load_image(view, frame), dataset.camera(view, frame).img_H_ground())
 
 
 def _by_position(xy):
@@ -85,7 +85,7 @@ def test_registration_input_equals_offline(sequence, model):
     """A HomographyStamped's h_img_to_ground (pixels -> ground, normalised [2][2] = 1) gives the same result."""
     def from_registration(dataset, view, frame):
         H = np.linalg.inv(dataset.camera(view, frame).img_H_ground())
-        return ViewInput(dataset.load_image(view, frame), img_H_ground_from_registration((H / H[2, 2]).ravel()),
+        return ViewInput(dataset.load_image(view, frame), Registration('ok', None, H / H[2, 2]).img_H_ground,
                          confidence=0.9)
 
     _assert_same(_offline(sequence, model), _live(sequence, model, from_registration), 1e-4)
@@ -113,10 +113,10 @@ def test_bad_views_are_reported_not_used(sequence, model):
     assert r.views['D3'].reason == 'corrupt compressed image'
     assert 'image' in r.views['D1'].reason and 'homography' in r.views['D2'].reason
     assert r.available_views == ['D4', 'D5', 'D6', 'D7', 'D8'] and len(r.detections) > 0
-    with pytest.raises(ViewInputError, match='NaN'):
-        img_H_ground_from_registration([np.nan] * 9)
-    with pytest.raises(ViewInputError, match='singular'):
-        img_H_ground_from_registration([0.0] * 9)
+    with pytest.raises(RegistrationError, match='NaN'):
+        Registration('ok', None, [np.nan] * 9).img_H_ground
+    with pytest.raises(RegistrationError, match='singular'):
+        Registration('ok', None, [0.0] * 9).img_H_ground
     # no usable view: no network run, no invented detections, the stream goes on
     empty = fuser.process(1.5, {})
     assert empty.heatmap is None and len(empty.detections) == 0 and 'temporal' in empty.resets
@@ -161,7 +161,7 @@ def test_reduced_jpeg_decode_gives_the_detections_of_the_full_decode(matrix_samp
         views_full, views_small = {}, {}
         for v in dataset.views:
             jpeg = cv2.imencode('.jpg', dataset.load_image(v, frame), [cv2.IMWRITE_JPEG_QUALITY, 95])[1]
-            H = img_H_ground_from_projection(dataset.camera(v, frame).P)
+            H = dataset.camera(v, frame).img_H_ground()
             views_full[v] = ViewInput(cv2.imdecode(jpeg, cv2.IMREAD_COLOR), H)
             views_small[v] = ViewInput(cv2.imdecode(jpeg, flag), at_reduced_resolution(H, r))
             assert views_small[v].image.shape == (1080 // r, 1920 // r, 3)

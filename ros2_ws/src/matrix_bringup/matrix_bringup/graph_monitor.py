@@ -17,13 +17,8 @@ summary table (also ``out_dir/graph_summary.txt``), writes ``out_dir/graph_overv
 Exit code 1 if no frame could be scored at all.
 """
 
-import csv
 import time
-from dataclasses import asdict, dataclass, field
-from pathlib import Path
 
-import cv2
-import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from matrix_msgs.msg import HomographyStamped, TrackArray
@@ -31,36 +26,15 @@ from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, Image
 from std_msgs.msg import Header
 
-from matrix_core.evaluation.graph_report import overview_image, score_view_frame, summary_table
-from matrix_ros.conversions import ConversionError, camera_info_to_camera, msg_to_image, stamp_to_seconds
-from matrix_ros.params import parse_node_args, declare_settings
+from matrix_bringup.monitor_settings import GraphMonitorSettings
+from matrix_core import topics
+from matrix_core.evaluation.graph_report import write_graph_report
+from matrix_ros.conversions import (ConversionError, camera_info_to_camera, msg_to_image, registration_from_msg,
+                                    stamp_to_seconds)
+from matrix_ros.params import declare_settings, parse_node_args
 from matrix_ros.qos import publisher_qos, qos_by_name
 
-STAGES = ('register', 'calib', 'tracks')
-
-
-@dataclass
-class GraphMonitorSettings:
-    views: list[str] = field(default_factory=lambda: [f'D{i}' for i in range(1, 9)],
-                             metadata={'help': 'views to score'})
-    expected_frames: int = field(default=0, metadata={
-        'help': 'stop after this many frames are done (0 = on idle_timeout only)'})
-    wait_for: list[str] = field(default_factory=lambda: ['register'], metadata={
-        'help': f'stages that must have processed a frame before it is done (announced): any of {STAGES}'})
-    tracks_topic: str = field(default='/tracks', metadata={'help': 'matrix_msgs/TrackArray topic of the tracks stage'})
-    settle_time: float = field(default=3.0, metadata={
-        'help': 'after expected_frames are done, stop once nothing arrived for this long, seconds'})
-    idle_timeout: float = field(default=30.0, metadata={'help': 'stop when nothing arrived for this long, seconds'})
-    area: list[float] = field(default_factory=lambda: [0.0, -30.0, 30.0, 0.0], metadata={
-        'help': 'scene ground x_min y_min x_max y_max (internal world metres) for the scores and picture'})
-    out_dir: str = field(default='out/graph_monitor', metadata={'help': 'where the table, CSV and PNG go'})
-
-    def __post_init__(self):
-        unknown = set(self.wait_for) - set(STAGES)
-        if unknown or not self.wait_for:
-            raise ValueError(f'wait_for must list some of {STAGES}, got {self.wait_for}')
-        if len(self.area) != 4 or self.area[0] >= self.area[2] or self.area[1] >= self.area[3]:
-            raise ValueError(f'area must be x_min y_min x_max y_max, got {self.area}')
+FRAME_DONE_TOPIC = '/graph_monitor/frame_done'
 
 
 class GraphMonitor(Node):
@@ -72,18 +46,18 @@ class GraphMonitor(Node):
         self.done = False
         history = qos_by_name('history', depth=50)
         for view in s.views:
-            self.create_subscription(CameraInfo, f'/{view}/ground_truth/camera_info',
+            self.create_subscription(CameraInfo, topics.drone_topic(view, topics.GROUND_TRUTH_CAMERA_INFO),
                                      lambda m, v=view: self._camera(self.truth, v, m), history)
-            self.create_subscription(CameraInfo, f'/{view}/camera_info',
+            self.create_subscription(CameraInfo, topics.drone_topic(view, topics.CAMERA_INFO),
                                      lambda m, v=view: self._camera(self.estimated, v, m), history)
-            self.create_subscription(HomographyStamped, f'/{view}/homography',
+            self.create_subscription(HomographyStamped, topics.drone_topic(view, topics.HOMOGRAPHY),
                                      lambda m, v=view: self._homography(v, m), history)
-            self.create_subscription(Image, f'/{view}/image_raw', lambda m, v=view: self._image(v, m),
+            self.create_subscription(Image, topics.drone_topic(view, topics.IMAGE_RAW), lambda m, v=view: self._image(v, m),
                                      qos_by_name('reliable', depth=2))
-        self.create_subscription(DiagnosticArray, '/diagnostics', self._diagnostics, qos_by_name('history', 200))
+        self.create_subscription(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, self._diagnostics, qos_by_name('history', 200))
         if 'tracks' in s.wait_for:
             self.create_subscription(TrackArray, s.tracks_topic, self._tracks, history)
-        self.frame_done_pub = self.create_publisher(Header, '/graph_monitor/frame_done', publisher_qos())
+        self.frame_done_pub = self.create_publisher(Header, FRAME_DONE_TOPIC, publisher_qos())
         self.processed = {}   # stamp -> {(stage, view)} seen; view '' for tracks
         self.needed = {(stage, v) for stage in s.wait_for if stage != 'tracks' for v in s.views}
         self.needed |= {('tracks', '')} if 'tracks' in s.wait_for else set()
@@ -120,7 +94,7 @@ class GraphMonitor(Node):
             self.get_logger().error(f'{view}: unusable CameraInfo: {exc}')
 
     def _homography(self, view, msg):
-        self.homography[self._key(view, msg)] = msg
+        self.homography[self._key(view, msg)] = registration_from_msg(msg)
 
     def _image(self, view, msg):
         try:
@@ -142,35 +116,9 @@ class GraphMonitor(Node):
 
     def finish(self):
         s = self.settings
-        scores = []
-        for key, truth in sorted(self.truth.items(), key=lambda kv: (kv[0][1], kv[0][0])):
-            h = self.homography.get(key)
-            ground_H_img = None if h is None else np.array(h.h_img_to_ground).reshape(3, 3)
-            scores.append(score_view_frame(key[0], key[1], truth, s.area, self.estimated.get(key),
-                                           None if h is None else h.status,
-                                           None if h is None else h.confidence, ground_H_img))
-        out = Path(s.out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        table = summary_table(scores, s.views)
-        print(table, flush=True)
-        (out / 'graph_summary.txt').write_text(table + '\n')
-        if scores:
-            with open(out / 'graph_scores.csv', 'w', newline='') as f:
-                writer = csv.DictWriter(f, fieldnames=list(asdict(scores[0])))
-                writer.writeheader()
-                writer.writerows(asdict(sc) for sc in scores)
-            last = max(k[1] for k in self.truth)
-            keys = [(v, last) for v in s.views if (v, last) in self.images and (v, last) in self.truth]
-            if keys:
-                ok_h = {k[0]: np.array(self.homography[k].h_img_to_ground).reshape(3, 3) for k in keys
-                        if k in self.homography and self.homography[k].status == 'ok'}
-                picture = overview_image({k[0]: self.images[k] for k in keys}, {k[0]: self.truth[k] for k in keys},
-                                         s.area, {k[0]: self.estimated[k] for k in keys if k in self.estimated}, ok_h)
-                cv2.imwrite(str(out / 'graph_overview.png'), picture)
-                print(f'picture: {out / "graph_overview.png"} (white: true calibration, green: published '
-                      f'calibration, magenta: registration homography)', flush=True)
+        self.scored = write_graph_report(s.out_dir, s.views, s.area, self.truth, self.estimated, self.homography,
+                                         self.images)
         self.done = True
-        self.scored = len(scores)
 
 
 def main(argv=None) -> int:

@@ -5,7 +5,9 @@ Convention: internal world metres and pixel-centre image pixels (``matrix_core.g
 ``ground_H_img`` maps current-image pixels to world ground metres.
 """
 
-from dataclasses import dataclass
+import csv
+from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -115,3 +117,50 @@ def overview_image(images: dict, truth: dict, area, estimated: dict = None, grou
         tiles.append(np.zeros_like(tiles[0]))
     rows = [np.concatenate(tiles[i:i + cols], axis=1) for i in range(0, len(tiles), cols)]
     return np.concatenate(rows, axis=0)
+
+
+def score_registration(view: str, stamp: float, truth: Camera, area, estimated: Camera = None,
+                       registration=None) -> ViewFrameScore:
+    """:func:`score_view_frame` of a :class:`~matrix_core.register.registration.Registration` (or None)."""
+    if registration is None:
+        return score_view_frame(view, stamp, truth, area, estimated)
+    status = 'ok' if registration.ok else f'{registration.status}: {registration.message}'
+    return score_view_frame(view, stamp, truth, area, estimated, status, registration.confidence,
+                            registration.ground_H_img if registration.ok else None)
+
+
+def write_graph_report(out_dir, views: list, area, truth: dict, estimated: dict, registrations: dict,
+                       images: dict) -> int:
+    """Score every (view, stamp) of ``truth`` and write ``graph_summary.txt`` (also printed),
+    ``graph_scores.csv`` and ``graph_overview.png`` (the last stamp with images) to ``out_dir``.
+
+    Args:
+        truth, estimated: (view, stamp) -> Camera; registrations: (view, stamp) -> Registration;
+        images: (view, stamp) -> (H, W, 3) BGR image.
+
+    Returns:
+        How many (view, stamp) pairs were scored.
+    """
+    scores = [score_registration(key[0], key[1], cam, area, estimated.get(key), registrations.get(key))
+              for key, cam in sorted(truth.items(), key=lambda kv: (kv[0][1], kv[0][0]))]
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    table = summary_table(scores, views)
+    print(table, flush=True)
+    (out / 'graph_summary.txt').write_text(table + '\n')
+    if not scores:
+        return 0
+    with open(out / 'graph_scores.csv', 'w', newline='') as f:
+        writer = csv.DictWriter(f, fieldnames=list(asdict(scores[0])))
+        writer.writeheader()
+        writer.writerows(asdict(sc) for sc in scores)
+    last = max(k[1] for k in truth)
+    keys = [(v, last) for v in views if (v, last) in images and (v, last) in truth]
+    if keys:
+        ok_h = {k[0]: registrations[k].ground_H_img for k in keys if k in registrations and registrations[k].ok}
+        picture = overview_image({k[0]: images[k] for k in keys}, {k[0]: truth[k] for k in keys},
+                                 area, {k[0]: estimated[k] for k in keys if k in estimated}, ok_h)
+        cv2.imwrite(str(out / 'graph_overview.png'), picture)
+        print(f'picture: {out / "graph_overview.png"} (white: true calibration, green: published '
+              f'calibration, magenta: registration homography)', flush=True)
+    return len(scores)

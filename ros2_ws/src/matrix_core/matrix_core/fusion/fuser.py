@@ -165,6 +165,21 @@ class BevFuser:
         timing = {'prepare_s': t1 - t0, 'network_s': t2 - t1, 'track_s': t3 - t2, 'total_s': t3 - t0}
         return FuseResult(stamp, dets, tracks, heatmap, status, timing, resets)
 
+    def process_safely(self, stamp: float, views: dict, decode_s: float = 0.0) -> FuseResult:
+        """:meth:`process` for a live stream: an error of the network (e.g. non-finite output) gives a frame with
+        no detections, every view reported ``fusion failed: <why>`` (never invented detections), and the temporal
+        state restarts. ``decode_s`` (seconds spent building ``views``) is added to the timings."""
+        t0 = time.perf_counter()
+        try:
+            result = self.process(stamp, views)
+        except (ValueError, RuntimeError) as exc:
+            self.runner.reset()
+            result = FuseResult(stamp, BevDetections(np.zeros((0, 2)), np.zeros(0)), [], None,
+                                {v: ViewStatus(False, f'fusion failed: {exc}') for v in self.settings.views},
+                                {'total_s': time.perf_counter() - t0}, ['temporal'])
+        result.timing = {'decode_s': decode_s, **result.timing}
+        return result
+
     def _track(self, dets: BevDetections) -> list:
         out = []
         for t in self.tracker.update(dets):

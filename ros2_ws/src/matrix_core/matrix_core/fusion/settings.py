@@ -3,6 +3,7 @@
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from matrix_core import topics
 from matrix_core.tracking.settings import TrackerSettings
 
 INPUT_KINDS = ('homography', 'camera_info')
@@ -24,15 +25,17 @@ class FuseSettings(TrackerSettings):
         'help': 'drones to fuse, in the order the network sees them'})
     image_kind: str = field(default='raw', metadata={
         'help': 'raw (sensor_msgs/Image on image_topic), compressed (CompressedImage on compressed_topic) or both'})
-    image_topic: str = field(default='/{view}/image_raw', metadata={'help': 'raw image topic pattern'})
-    compressed_topic: str = field(default='/{view}/image/compressed', metadata={
+    image_topic: str = field(default='{view}/' + topics.IMAGE_RAW, metadata={
+        'help': 'raw image topic pattern ({view}: the drone; relative names, see matrix_core.topics)'})
+    compressed_topic: str = field(default='{view}/' + topics.IMAGE_COMPRESSED, metadata={
         'help': 'compressed image topic pattern'})
     input_kind: str = field(default='homography', metadata={
         'help': 'where each frame\'s ground homography comes from: homography (matrix_msgs/HomographyStamped, '
                 'h_img_to_ground, from register) or camera_info (CameraInfo p = K[R|t], from calib or the bag\'s '
                 'ground truth)'})
-    homography_topic: str = field(default='/{view}/homography', metadata={'help': 'HomographyStamped topic pattern'})
-    camera_info_topic: str = field(default='/{view}/camera_info', metadata={'help': 'CameraInfo topic pattern'})
+    homography_topic: str = field(default='{view}/' + topics.HOMOGRAPHY, metadata={
+        'help': 'HomographyStamped topic pattern'})
+    camera_info_topic: str = field(default='{view}/' + topics.CAMERA_INFO, metadata={'help': 'CameraInfo topic pattern'})
     min_confidence: float = field(default=0.0, metadata={
         'help': 'homographies with a lower registration confidence are treated as missing'})
     checkpoint: str = field(default='', metadata={
@@ -70,6 +73,7 @@ class FuseSettings(TrackerSettings):
             raise ValueError(f'device {self.device!r}: only cpu is supported (SequenceRunner decodes on the CPU)')
 
     def topic(self, pattern: str, view: str) -> str:
+        """A pattern's topic for ``view``: '{view}/image_raw' -> 'D3/image_raw' (= topics.drone_topic)."""
         return pattern.format(view=view)
 
     def checkpoint_path(self) -> Path:

@@ -1,11 +1,9 @@
-"""One view's input to a fused frame, and its ground homography from either calibration source.
+"""One view's input to a fused frame, and the image scale it is decoded at.
 
 Convention: ``img_H_ground`` (3, 3) maps world ground metres (x, y on z = 0) to full-resolution image
 pixels (OpenCV pixel centres), any overall scale or sign (``bev.lifting.orient_ground_homography`` fixes
-the sign). Sources:
-
-- registration (``HomographyStamped.h_img_to_ground``: pixels -> ground): ``img_H_ground = inv(H)``;
-- calibration (CameraInfo ``p = K [R | t]``, world -> pixels): ``img_H_ground = P[:, (0, 1, 3)]``.
+the sign). It comes from a registration (``Registration.img_H_ground``) or a calibration
+(``Camera.img_H_ground()``): ``fusion.view_inputs`` builds views from either message.
 """
 
 from dataclasses import dataclass
@@ -13,9 +11,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from matrix_core.geometry.homography import pixel_scale_homography
-
-# Below this, a homography is numerically singular (its inverse would invent geometry).
-_MIN_RCOND = 1e-12
 
 
 class ViewInputError(ValueError):
@@ -41,28 +36,6 @@ class ViewInput:
     @property
     def usable(self) -> bool:
         return self.image is not None and self.img_H_ground is not None and not self.reason
-
-
-def _checked(H: np.ndarray, what: str) -> np.ndarray:
-    if H.shape != (3, 3) or not np.all(np.isfinite(H)):
-        raise ViewInputError(f'{what} has NaN/infinite values or is not 3x3')
-    if np.linalg.cond(H) > 1 / _MIN_RCOND:
-        raise ViewInputError(f'{what} is singular')
-    return H
-
-
-def img_H_ground_from_registration(h_img_to_ground) -> np.ndarray:
-    """(9,) or (3, 3) ``img -> ground`` (HomographyStamped.h_img_to_ground) -> (3, 3) ``img_H_ground``."""
-    H = _checked(np.asarray(h_img_to_ground, dtype=np.float64).reshape(3, 3), 'h_img_to_ground')
-    return np.linalg.inv(H)
-
-
-def img_H_ground_from_projection(p) -> np.ndarray:
-    """(12,) or (3, 4) ``P = K [R | t]`` (CameraInfo.p, world -> pixels) -> (3, 3) ``img_H_ground``."""
-    P = np.asarray(p, dtype=np.float64)
-    if P.size != 12:
-        raise ViewInputError(f'projection matrix needs 12 values, got {P.size}')
-    return _checked(P.reshape(3, 4)[:, (0, 1, 3)].copy(), 'P[:, (0, 1, 3)]')
 
 
 def check_image(image) -> np.ndarray:

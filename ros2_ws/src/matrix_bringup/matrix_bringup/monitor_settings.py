@@ -1,0 +1,32 @@
+"""Parameters of the ``graph_monitor`` node."""
+
+from dataclasses import dataclass, field
+
+from matrix_core import topics
+
+STAGES = ('register', 'calib', 'tracks')
+
+
+@dataclass
+class GraphMonitorSettings:
+    views: list[str] = field(default_factory=lambda: [f'D{i}' for i in range(1, 9)],
+                             metadata={'help': 'views to score'})
+    expected_frames: int = field(default=0, metadata={
+        'help': 'stop after this many frames are done (0 = on idle_timeout only)'})
+    wait_for: list[str] = field(default_factory=lambda: ['register'], metadata={
+        'help': f'stages that must have processed a frame before it is done (announced): any of {STAGES}'})
+    tracks_topic: str = field(default=topics.TRACKS, metadata={
+        'help': 'matrix_msgs/TrackArray topic of the tracks stage'})
+    settle_time: float = field(default=3.0, metadata={
+        'help': 'after expected_frames are done, stop once nothing arrived for this long, seconds'})
+    idle_timeout: float = field(default=30.0, metadata={'help': 'stop when nothing arrived for this long, seconds'})
+    area: list[float] = field(default_factory=lambda: [0.0, -30.0, 30.0, 0.0], metadata={
+        'help': 'scene ground x_min y_min x_max y_max (internal world metres) for the scores and picture'})
+    out_dir: str = field(default='out/graph_monitor', metadata={'help': 'where the table, CSV and PNG go'})
+
+    def __post_init__(self):
+        unknown = set(self.wait_for) - set(STAGES)
+        if unknown or not self.wait_for:
+            raise ValueError(f'wait_for must list some of {STAGES}, got {self.wait_for}')
+        if len(self.area) != 4 or self.area[0] >= self.area[2] or self.area[1] >= self.area[3]:
+            raise ValueError(f'area must be x_min y_min x_max y_max, got {self.area}')

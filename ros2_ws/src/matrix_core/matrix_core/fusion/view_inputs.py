@@ -1,0 +1,76 @@
+"""One frame's messages of each view -> :class:`~matrix_core.fusion.views.ViewInput`: the ground homography
+from the view's geometry message and the image decoded at the scale the network needs.
+
+Message-agnostic (``matrix_core.message_fields`` reads rclpy and rosbags messages alike), so the fuse node
+only subscribes and hands the messages over. Geometry:
+
+- ``matrix_msgs/HomographyStamped`` (from ``register``): its :class:`Registration`; a view is missing when
+  the registration failed or is unusable, or its confidence is below ``min_confidence``;
+- ``sensor_msgs/CameraInfo`` (``p = K [R | t]``, from ``calib`` or a bag's ground truth): its camera.
+"""
+
+from matrix_core.fusion.views import ViewInput, ViewInputError, at_reduced_resolution, jpeg_reduction
+from matrix_core.message_fields import (ConversionError, camera_from_camera_info, image_from_msg, is_jpeg,
+                                        registration_from_msg)
+from matrix_core.register.registration import STATUS_FAILED, RegistrationError
+
+
+def registration_ground(registration, min_confidence: float):
+    """(3, 3) ``img_H_ground`` of a registration a view may use; :class:`ViewInputError` saying why not."""
+    if registration.status == STATUS_FAILED:
+        raise ViewInputError(f'registration {STATUS_FAILED}: {registration.message}')
+    if registration.ok and registration.confidence < min_confidence:
+        raise ViewInputError(f'registration confidence {registration.confidence:.2f} < {min_confidence}')
+    try:
+        return registration.img_H_ground
+    except RegistrationError as exc:
+        raise ViewInputError(registration.message or str(exc)) from None
+
+
+class ViewInputs:
+    """Builds the views of each frame; remembers each view's full image size for the reduced JPEG decode.
+
+    Args:
+        input_size: (w, h) of the network input.
+        min_confidence: registrations below it are not used.
+        reduced_decode: decode JPEGs directly at 1/2, 1/4 or 1/8 size when that still covers ``input_size``
+            (once a full decode told the view's image size).
+    """
+
+    def __init__(self, input_size: tuple, min_confidence: float, reduced_decode: bool):
+        self.input_size, self.min_confidence, self.reduced_decode = input_size, min_confidence, reduced_decode
+        self.full_size = {}   # view -> (w, h) of its last fully decoded image
+
+    def view_input(self, view: str, image_msg, geometry_msg, geometry_name: str) -> ViewInput:
+        """One view's :class:`ViewInput`; any problem becomes its reason. ``geometry_name`` names the missing
+        geometry in that reason (e.g. 'homography')."""
+        if image_msg is None or geometry_msg is None:
+            return ViewInput(reason='no ' + ' and no '.join(
+                p for p, x in (('image', image_msg), (geometry_name, geometry_msg)) if x is None))
+        confidence = None
+        try:
+            if hasattr(geometry_msg, 'h_img_to_ground'):
+                registration = registration_from_msg(geometry_msg)
+                confidence = float(registration.confidence)
+                img_H_ground = registration_ground(registration, self.min_confidence)
+            else:
+                img_H_ground = camera_from_camera_info(geometry_msg).img_H_ground()
+            image, img_H_ground = self._decode(view, image_msg, img_H_ground)
+        except (ViewInputError, ConversionError) as exc:
+            return ViewInput(reason=str(exc), confidence=confidence)
+        return ViewInput(image, img_H_ground, confidence=confidence)
+
+    def _decode(self, view: str, msg, img_H_ground):
+        """The image and its ground homography: a JPEG at the smallest libjpeg scale that keeps the network
+        input, once a full decode told the view's image size."""
+        full = self.full_size.get(view)
+        if hasattr(msg, 'format') and self.reduced_decode and full and is_jpeg(msg):
+            r = jpeg_reduction(full, self.input_size)
+            if r > 1:
+                image = image_from_msg(msg, r)
+                if (image.shape[1], image.shape[0]) == (-(-full[0] // r), -(-full[1] // r)):
+                    return image, at_reduced_resolution(img_H_ground, r)
+                # the stream's image size changed: decode in full and learn the new size
+        image = image_from_msg(msg)
+        self.full_size[view] = (image.shape[1], image.shape[0])
+        return image, img_H_ground
