@@ -31,6 +31,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, Image
 from std_msgs.msg import Header
 
+from matrix_core.datasets.matrix_conventions import MATRIX_AREA
 from matrix_core.evaluation.graph_report import overview_image, score_view_frame, summary_table
 from matrix_ros.conversions import ConversionError, camera_info_to_camera, msg_to_image, stamp_to_seconds
 from matrix_ros.params import parse_node_args, declare_settings
@@ -51,7 +52,7 @@ class GraphMonitorSettings:
     settle_time: float = field(default=3.0, metadata={
         'help': 'after expected_frames are done, stop once nothing arrived for this long, seconds'})
     idle_timeout: float = field(default=30.0, metadata={'help': 'stop when nothing arrived for this long, seconds'})
-    area: list[float] = field(default_factory=lambda: [0.0, -30.0, 30.0, 0.0], metadata={
+    area: list[float] = field(default_factory=lambda: list(MATRIX_AREA), metadata={
         'help': 'scene ground x_min y_min x_max y_max (internal world metres) for the scores and picture'})
     out_dir: str = field(default='out/graph_monitor', metadata={'help': 'where the table, CSV and PNG go'})
 

@@ -29,6 +29,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
 from matrix_core.datasets import DatasetError, MatrixDataset
+from matrix_core.datasets.matrix_conventions import MATRIX_AREA
 from matrix_core.register.backends import make_backend
 from matrix_core.register.registrar import Registrar
 from matrix_core.register.scene import settings_for_dataset
@@ -48,7 +49,7 @@ class RegisterNodeSettings(RegisterSettings):
     reference_dataset: str = field(default='', metadata={
         'help': 'MATRIX folder whose reference/ holds each view\'s reference image and calibration; empty: '
                 'the first frame with a CameraInfo becomes the reference'})
-    area: list[float] = field(default_factory=lambda: [0.0, -30.0, 30.0, 0.0], metadata={
+    area: list[float] = field(default_factory=lambda: list(MATRIX_AREA), metadata={
         'help': 'scene ground x_min y_min x_max y_max (internal world metres); overridden by reference_dataset'})
     image_topic: str = field(default='image_raw', metadata={'help': 'image topic under /<view>/'})
     compressed: bool = field(default=False, metadata={'help': 'subscribe /<view>/image/compressed instead'})
