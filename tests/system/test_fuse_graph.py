@@ -12,7 +12,7 @@ import pytest
 
 from matrix_core.bags import bag_topics
 from matrix_core.cli.main import main as cli
-from matrix_core.fusion.recording import read_recording_bag
+from matrix_core.evaluation.recording import read_recording_bag
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 FRAMES = 12

@@ -14,7 +14,7 @@ import pytest
 from matrix_core.bags import write_sequence_bag
 from matrix_core.cli.main import main as cli
 from matrix_core.datasets import MatrixDataset
-from matrix_core.fusion.recording import read_recording_bag
+from matrix_core.evaluation.recording import read_recording_bag
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 VIEWS = ['D1', 'D5']

@@ -193,7 +193,7 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
         topics = [*RECORDED, *((f'/{v}/{t}', m) for v in s.views for t, m in PER_VIEW_RECORDED)]
         nodes.append(NodeSpec('matrix_ros', 'recorder', 'recorder', '', {
             'out': s.record, 'topics': [t for t, _ in topics], 'types': [m for _, m in topics],
-            'tracks_topic': '/tracks', **sim}))
+            'tracks_topic': '/tracks', 'sequence_bag': str(s.bag), **sim}))
     if s.monitor:
         nodes.append(NodeSpec('matrix_bringup', 'graph_monitor', 'graph_monitor', '', {
             'views': list(s.views), 'expected_frames': bag.frames, 'wait_for': ['register', 'calib', 'tracks'],

@@ -3,6 +3,7 @@
 from dataclasses import dataclass, field
 
 from matrix_core import topics
+from matrix_core.datasets.matrix_conventions import MATRIX_AREA
 
 STAGES = ('register', 'calib', 'tracks')
 
@@ -20,7 +21,7 @@ class GraphMonitorSettings:
     settle_time: float = field(default=3.0, metadata={
         'help': 'after expected_frames are done, stop once nothing arrived for this long, seconds'})
     idle_timeout: float = field(default=30.0, metadata={'help': 'stop when nothing arrived for this long, seconds'})
-    area: list[float] = field(default_factory=lambda: [0.0, -30.0, 30.0, 0.0], metadata={
+    area: list[float] = field(default_factory=lambda: list(MATRIX_AREA), metadata={
         'help': 'scene ground x_min y_min x_max y_max (internal world metres) for the scores and picture'})
     out_dir: str = field(default='out/graph_monitor', metadata={'help': 'where the table, CSV and PNG go'})
 

@@ -3,6 +3,7 @@ flags) plus the node's wiring."""
 
 from dataclasses import dataclass, field
 
+from matrix_core.datasets.matrix_conventions import MATRIX_AREA
 from matrix_core.register.settings import RegisterSettings
 from matrix_ros.node_settings import NodeSettings
 
@@ -14,7 +15,7 @@ class RegisterNodeSettings(NodeSettings, RegisterSettings):
     reference_dataset: str = field(default='', metadata={
         'help': 'MATRIX folder whose reference/ holds each view\'s reference image and calibration; empty: '
                 'the first frame with a CameraInfo becomes the reference'})
-    area: list[float] = field(default_factory=lambda: [0.0, -30.0, 30.0, 0.0], metadata={
+    area: list[float] = field(default_factory=lambda: list(MATRIX_AREA), metadata={
         'help': 'scene ground x_min y_min x_max y_max (internal world metres); overridden by reference_dataset'})
     image_topic: str = field(default='image_raw', metadata={'help': 'image stream under <view>/'})
     compressed: bool = field(default=False, metadata={'help': 'subscribe <view>/image/compressed instead'})

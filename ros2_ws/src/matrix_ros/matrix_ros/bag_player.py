@@ -11,9 +11,10 @@ Messages with the same bag time form one frame. Two pacings:
   subscription asks for ``lockstep_qos`` ``history`` (transient local), so an announcement published before
   the two sides matched still arrives (this workspace's publishers offer it, see ``matrix_ros.qos``).
 
-``/clock`` (rosgraph_msgs/Clock) carries the bag time of each frame before it is published, so nodes
-started with ``use_sim_time:=true`` follow the recording. Published topics offer transient-local
-history (``matrix_ros.qos.publisher_qos``). When all frames are out the node logs it and, with
+The bag's sequence clock (``matrix_core.bags.clock``: first stamp and frame period, stored in its metadata)
+numbers the frames in the log. ``/clock`` (rosgraph_msgs/Clock) carries the bag time of each frame before it
+is published, so nodes started with ``use_sim_time:=true`` follow the recording. Published topics offer
+transient-local history (``matrix_ros.qos.publisher_qos``). When all frames are out the node logs it and, with
 ``exit_when_done``, exits: code 0, or 3 when lockstep timed out for some frame (the run is not
 deterministic), 1 when nothing was played.
 """
@@ -28,6 +29,7 @@ from rclpy.node import Node
 from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
 
+from matrix_core.bags.clock import read_sequence_clock
 from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
 from matrix_ros.message_types import message_class
 from matrix_ros.params import parse_node_args, declare_settings
@@ -67,6 +69,7 @@ class BagPlayer(Node):
         self.settings = s = declare_settings(self, BagPlayerSettings, defaults)
         if not (Path(s.bag) / 'metadata.yaml').is_file():
             raise FileNotFoundError(f'not a rosbag2 folder (no metadata.yaml): {s.bag}')
+        self.sequence_clock = read_sequence_clock(s.bag, note=self.get_logger().warning)
         self.reader = Reader(Path(s.bag))
         self.reader.open()
         self.connections = [c for c in self.reader.connections if not s.topics or c.topic in s.topics]
@@ -81,7 +84,8 @@ class BagPlayer(Node):
             self.lockstep_sub = self.create_subscription(message_class(s.lockstep_type), s.lockstep_topic,
                                                          self._on_lockstep, qos_by_name(s.lockstep_qos, 50))
         self.get_logger().info(f'playing {s.bag}: {len(self.pubs)} topics, '
-                               + (f'lockstep on {s.lockstep_topic}' if s.lockstep else f'rate {s.rate}'))
+                               + (f'lockstep on {s.lockstep_topic}' if s.lockstep else f'rate {s.rate}')
+                               + f'; sequence clock: {self.sequence_clock.describe()}')
 
     def _on_lockstep(self, msg):
         header = msg if hasattr(msg, 'frame_id') else msg.header  # a std_msgs/Header or a stamped message
@@ -142,13 +146,15 @@ class BagPlayer(Node):
                     self.timed_out.append(stamp)
                     self.get_logger().warning(
                         f'lockstep: only {self.released.get(stamp, 0)}/{s.lockstep_count} messages on '
-                        f'{s.lockstep_topic} for t={stamp:.3f} s after {s.lockstep_timeout} s; going on')
+                        f'{s.lockstep_topic} for frame {self.sequence_clock.frame(stamp)} (t={stamp:.3f} s) after '
+                        f'{s.lockstep_timeout} s; going on')
             previous_ns = time_ns
         # Reliable subscribers must get the last frame before the process exits.
         for pub in [*self.pubs.values(), self.clock_pub]:
             pub.wait_for_all_acked(Duration(seconds=5.0))
         self.get_logger().info(f'played {count} frames'
-                               + (f' up to t={previous_ns * 1e-9:.3f} s' if previous_ns else '')
+                               + (f' up to frame {self.sequence_clock.frame_ns(previous_ns)} '
+                                  f'(t={previous_ns * 1e-9:.3f} s)' if previous_ns else '')
                                + (f'; lockstep timed out for {len(self.timed_out)} of them' if self.timed_out else ''))
         return count
 

@@ -12,6 +12,7 @@ from rclpy.node import Node
 from std_msgs.msg import Header
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
+from matrix_core.bags.clock import DEFAULT_CLOCK
 from matrix_core.datasets import DatasetError, open_dataset
 from matrix_ros.conversions import camera_to_camera_info, image_to_msg, seconds_to_stamp
 from matrix_ros.params import declare_settings, spin_node
@@ -22,8 +23,10 @@ from matrix_ros.qos import publisher_qos, qos_by_name
 class DatasetPlayerSettings:
     dataset: str = field(default='', metadata={'help': 'MATRIX, Wildtrack or MultiviewX folder to publish'})
     rate: float = field(default=1.0, metadata={'help': 'playback speed factor (1.0 = recorded 0.5 s period)'})
-    frame_period: float = field(default=0.5, metadata={'help': 'seconds between recorded frames'})
-    start_time: float = field(default=1.0, metadata={'help': 'header stamp of the first frame, seconds'})
+    frame_period: float = field(default=DEFAULT_CLOCK.frame_period, metadata={
+        'help': 'seconds between recorded frames'})
+    start_time: float = field(default=DEFAULT_CLOCK.start_time, metadata={
+        'help': 'header stamp of the first frame, seconds'})
     views: list[str] = field(default_factory=list, metadata={'help': 'views to publish (empty = all)'})
     max_frames: int = field(default=0, metadata={'help': 'publish at most this many frames (0 = all)'})
     loop: bool = field(default=False, metadata={'help': 'start again after the last frame'})

@@ -6,9 +6,13 @@ Every topic in ``topics`` (with its type at the same index of ``types``) is stor
 published before the recorder matched (this workspace's publishers offer them), so a recorder that joins
 a moment late loses nothing; a volatile publisher needs ``qos:=reliable``. With ``tracks_topic`` set, each ``matrix_msgs/TrackArray`` also becomes lines
 ``frame id x y`` in ``mot_file`` (frame = round((stamp - start_time) / frame_period); metres, world
-frame), the format ``matrix-tracker score`` reads. The bag is closed cleanly on Ctrl-C / SIGTERM.
+frame), the format ``matrix-tracker score`` reads. The sequence clock (``start_time``, ``frame_period``) is the
+one stored in ``sequence_bag`` (the bag being replayed; see ``matrix_core.bags.clock``), else the default
+(1.0 s, 0.5 s); the parameters override it. The recorder's bag stores the clock it used, as a sequence bag
+does. The bag is closed cleanly on Ctrl-C / SIGTERM.
 """
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -17,6 +21,7 @@ from rclpy.node import Node
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
+from matrix_core.bags.clock import SequenceClock, read_sequence_clock
 from matrix_ros.conversions import stamp_to_seconds
 from matrix_ros.message_types import message_class
 from matrix_ros.params import declare_settings, spin_node
@@ -30,8 +35,10 @@ class RecorderSettings:
     types: list[str] = field(default_factory=list, metadata={'help': 'message type of each topic, e.g. sensor_msgs/msg/CameraInfo'})
     tracks_topic: str = field(default='', metadata={'help': 'matrix_msgs/TrackArray topic to export as text (empty: none)'})
     mot_file: str = field(default='', metadata={'help': 'text file for the tracks (default: OUT.tracks.txt)'})
-    start_time: float = field(default=1.0, metadata={'help': 'stamp of frame 0, seconds'})
-    frame_period: float = field(default=0.5, metadata={'help': 'seconds between frames'})
+    sequence_bag: str = field(default='', metadata={
+        'help': 'the sequence bag being replayed: its stored clock numbers the MOT frames (empty: 1.0 s, 0.5 s)'})
+    start_time: float = field(default=math.nan, metadata={'help': 'stamp of frame 0, seconds (NaN: the clock\'s)'})
+    frame_period: float = field(default=math.nan, metadata={'help': 'seconds between frames (NaN: the clock\'s)'})
     qos: str = field(default='history', metadata={
         'help': 'QoS of the subscriptions: history (transient local: also what was published before matching), '
                 'reliable (volatile publishers) or sensor_data'})
@@ -42,6 +49,11 @@ class RecorderSettings:
         if self.frame_period <= 0:
             raise ValueError('frame_period must be positive')
         qos_by_name(self.qos)
+
+    def clock(self) -> SequenceClock:
+        """The sequence clock: ``sequence_bag``'s (or the default), with the parameters that are set."""
+        clock = read_sequence_clock(self.sequence_bag) if self.sequence_bag else SequenceClock()
+        return clock.overridden(self.start_time, self.frame_period)
 
 
 def _typestore():
@@ -66,8 +78,11 @@ class Recorder(Node):
             raise ValueError('parameter out must name the bag folder to create')
         if Path(s.out).exists():
             raise FileExistsError(f'{s.out} exists; rosbag2 writes a new folder')
+        self.clock = s.clock()
         store = _typestore()
         self.writer = Writer(Path(s.out), version=9, storage_plugin=StoragePlugin.MCAP)
+        for key, value in self.clock.custom_data().items():
+            self.writer.set_custom_data(key, value)
         self.writer.open()
         self.counts = {}
         for topic, type_name in zip(s.topics, s.types):
@@ -81,15 +96,14 @@ class Recorder(Node):
             self.mot = open(s.mot_file or f'{s.out}.tracks.txt', 'w')
             self.create_subscription(message_class('matrix_msgs/msg/TrackArray'), s.tracks_topic, self._tracks,
                                      qos_by_name(s.qos, 100))
-        self.get_logger().info(f'recording {len(s.topics)} topics to {s.out}')
+        self.get_logger().info(f'recording {len(s.topics)} topics to {s.out}; frames: {self.clock.describe()}')
 
     def _write(self, conn, topic, raw: bytes):
         self.writer.write(conn, self.get_clock().now().nanoseconds, raw)
         self.counts[topic] += 1
 
     def _tracks(self, msg):
-        s = self.settings
-        frame = round((stamp_to_seconds(msg.header.stamp) - s.start_time) / s.frame_period)
+        frame = self.clock.frame(stamp_to_seconds(msg.header.stamp))
         for track in msg.tracks:
             self.mot.write(f'{frame} {track.id} {track.position.x:.4f} {track.position.y:.4f}\n')
         self.mot.flush()

@@ -1,5 +1,6 @@
 """bag_player in its own process: a bag made from the real MATRIX sample replays over DDS unchanged,
-with /clock, and lockstep holds each next frame until the graph acknowledges the previous one."""
+with /clock, and lockstep holds each next frame until the graph acknowledges the previous one. The player
+reads the sequence clock the bag stores (and numbers the frames of its log with it)."""
 
 import subprocess
 import time
@@ -11,7 +12,7 @@ from geometry_msgs.msg import PointStamped
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, CompressedImage
 
-from matrix_core.bags import write_sequence_bag
+from matrix_core.bags import SequenceClock, write_sequence_bag
 from matrix_core.datasets import MatrixDataset
 from matrix_ros.conversions import camera_info_to_camera, compressed_to_image, stamp_to_seconds
 from matrix_ros.qos import publisher_qos
@@ -67,6 +68,29 @@ def test_replay_is_unchanged_and_publishes_clock(matrix_sample, sample_bag, node
         decoded = compressed_to_image(img).astype(float)
         assert np.abs(decoded - ds.load_image('D3', i)).mean() < 3.0  # JPEG of a JPEG
     assert [stamp_to_seconds(c.clock) for c in got['clock']][:5] == pytest.approx([1.0, 1.5, 2.0, 2.5, 3.0])
+    assert 'sequence clock: first stamp 1 s, 0.5 s per frame' in out and 'stores no sequence clock' not in out
+    assert 'played 5 frames up to frame 4 ' in out, out
+
+
+def test_player_reads_the_clock_stored_in_the_bag(matrix_sample, node_executable, tmp_path):
+    clock = SequenceClock(start_time=3.0, frame_period=0.25)
+    bag = write_sequence_bag(MatrixDataset(matrix_sample), tmp_path / 'bag', compressed=True, clock=clock,
+                             progress=False)
+    infos = []
+    rclpy.init()
+    node = rclpy.create_node('bag_clock_test')
+    node.create_subscription(CompressedImage, '/D3/image/compressed', lambda m: None, 10)   # the player waits for it
+    node.create_subscription(CameraInfo, '/D3/ground_truth/camera_info', infos.append, 10)
+    player = _player(node_executable, bag, 'rate:=20.0')
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and (len(infos) < 5 or player.poll() is None):
+        rclpy.spin_once(node, timeout_sec=0.1)
+    out = _finish(player)
+    node.destroy_node()
+    rclpy.shutdown()
+    assert player.returncode == 0, out
+    assert [stamp_to_seconds(i.header.stamp) for i in infos] == pytest.approx([clock.stamp(i) for i in range(5)])
+    assert 'sequence clock: first stamp 3 s, 0.25 s per frame' in out and 'played 5 frames up to frame 4 ' in out, out
 
 
 def test_lockstep_waits_for_the_graph(sample_bag, node_executable):

@@ -13,7 +13,7 @@ from matrix_msgs.msg import Track, TrackArray
 from sensor_msgs.msg import CameraInfo
 from std_msgs.msg import Header
 
-from matrix_core.bags import bag_topics, read_bag
+from matrix_core.bags import SequenceClock, bag_topics, read_bag, read_sequence_clock
 from matrix_core.datasets import MatrixDataset
 from matrix_ros.conversions import camera_to_camera_info, seconds_to_stamp
 from matrix_ros.qos import publisher_qos
@@ -45,6 +45,7 @@ def test_records_standard_and_custom_messages(matrix_sample, node_executable, tm
                                '/tracks': ('matrix_msgs/msg/TrackArray', 3)}
     infos = [m.msg for m in read_bag(out, ['/D2/camera_info'])]
     assert list(infos[2].p) == pytest.approx(list(camera_to_camera_info(ds.camera('D2', 2)).p))
+    assert read_sequence_clock(out) == SequenceClock()   # the clock that numbered the MOT frames, stored
 
 
 def _exercise(start_recorder, procs, ds):
@@ -82,3 +83,16 @@ def _exercise(start_recorder, procs, ds):
         node.destroy_node()
         rclpy.shutdown()
     assert rec.returncode == 0, log
+
+
+def test_clock_comes_from_the_sequence_bag_and_parameters_override_it(tmp_path):
+    from matrix_core.bags import SequenceBagWriter
+    from matrix_ros.recorder import RecorderSettings
+
+    clock = SequenceClock(start_time=3.0, frame_period=0.25)
+    with SequenceBagWriter(tmp_path / 'bag', ['D1'], clock=clock):
+        pass
+    assert RecorderSettings().clock() == SequenceClock()
+    assert RecorderSettings(sequence_bag=str(tmp_path / 'bag')).clock() == clock
+    assert RecorderSettings(sequence_bag=str(tmp_path / 'bag'), frame_period=1.0).clock() == SequenceClock(3.0, 1.0)
+    assert RecorderSettings(start_time=0.0).clock() == SequenceClock(0.0, 0.5)

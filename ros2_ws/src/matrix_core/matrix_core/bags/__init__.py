@@ -1,7 +1,8 @@
 """rosbag2 (MCAP) writing and reading with the pure-Python ``rosbags`` library (no rclpy).
 
-Topics of a sequence bag (frame ids: ``world`` and ``D{n}/camera_optical``; header stamps
-``start_time + frame_index * frame_period``, 0.5 s apart by default; the bag's receive time equals the stamp):
+Topics of a sequence bag (frame ids: ``world`` and ``D{n}/camera_optical``; header stamps from the sequence
+clock, ``start_time + frame_index * frame_period`` (1.0 s + 0.5 s per frame by default), which the bag stores in
+its metadata, see :mod:`matrix_core.bags.clock`; the bag's receive time equals the stamp):
 
 - ``/D{n}/image_raw`` (``sensor_msgs/msg/Image``, bgr8) or ``/D{n}/image/compressed``
   (``sensor_msgs/msg/CompressedImage``, jpeg) per drone;
@@ -15,8 +16,18 @@ Topics of a sequence bag (frame ids: ``world`` and ``D{n}/camera_optical``; head
 Everything is in the internal convention of :mod:`matrix_core.geometry.camera`.
 """
 
-from matrix_core.bags.reader import BagMessage, bag_topics, read_bag, read_sequence_frames
-from matrix_core.bags.writer import SequenceBagWriter, write_sequence_bag
+import importlib
 
-__all__ = ['BagMessage', 'SequenceBagWriter', 'bag_topics', 'read_bag', 'read_sequence_frames',
-           'write_sequence_bag']
+# Names are imported on first use: the clock (read by settings dataclasses, so by every CLI start) must not
+# pull in rosbags and the message code.
+_MODULE_OF = {'SequenceClock': 'clock', 'DEFAULT_CLOCK': 'clock', 'read_sequence_clock': 'clock',
+              'BagMessage': 'reader', 'bag_topics': 'reader', 'read_bag': 'reader', 'read_sequence_frames': 'reader',
+              'SequenceBagWriter': 'writer', 'write_sequence_bag': 'writer'}
+
+__all__ = sorted(_MODULE_OF)
+
+
+def __getattr__(name):
+    if name not in _MODULE_OF:
+        raise AttributeError(f'module {__name__!r} has no attribute {name!r}')
+    return getattr(importlib.import_module(f'{__name__}.{_MODULE_OF[name]}'), name)

@@ -1,4 +1,5 @@
-"""Writing sequence bags (rosbag2, MCAP storage) with ``rosbags``; topics in the package docstring."""
+"""Writing sequence bags (rosbag2, MCAP storage) with ``rosbags``; topics in the package docstring, the
+sequence clock (stored in the bag's metadata) in :mod:`matrix_core.bags.clock`."""
 
 from pathlib import Path
 
@@ -6,6 +7,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 
 from matrix_core.bags import messages as m
 from matrix_core import topics as t
+from matrix_core.bags.clock import SequenceClock
 
 
 class SequenceBagWriter:
@@ -15,20 +17,22 @@ class SequenceBagWriter:
         path: bag folder to create.
         views: view names ('D1', ...).
         compressed: write ``/D{n}/image/compressed`` (JPEG) instead of ``/D{n}/image_raw``.
-        start_time, frame_period: header stamp of frame index i is ``start_time + i * frame_period`` seconds.
+        clock: :class:`SequenceClock` (default: first stamp 1.0 s, 0.5 s per frame); frame index i gets
+            the header stamp ``clock.stamp(i)``. It is stored in the bag's metadata (custom data).
 
     Use as a context manager; call :meth:`write_frame` once per frame, in order.
     """
 
-    def __init__(self, path, views, compressed: bool = False, start_time: float = 1.0,
-                 frame_period: float = 0.5):
+    def __init__(self, path, views, compressed: bool = False, clock: SequenceClock = None):
         self.path = Path(path)
         if self.path.exists():
             raise FileExistsError(f'bag folder {self.path} already exists')
         self.views = list(views)
         self.compressed = compressed
-        self.start_time, self.frame_period = start_time, frame_period
+        self.clock = clock or SequenceClock()
         self._writer = Writer(self.path, version=9, storage_plugin=StoragePlugin.MCAP)
+        for key, value in self.clock.custom_data().items():
+            self._writer.set_custom_data(key, value)
         self._conn = {}
 
     def __enter__(self):
@@ -52,7 +56,7 @@ class SequenceBagWriter:
     def write_frame(self, index: int, images: dict, cameras: dict, positions: dict) -> int:
         """Write frame ``index``: images (view -> (H, W, 3) BGR), cameras (view -> Camera), positions (person
         id -> (3,) metres). Returns the stamp in nanoseconds."""
-        stamp = int(round((self.start_time + index * self.frame_period) * 1e9))
+        stamp = self.clock.stamp_ns(index)
         for v in self.views:
             hdr = m.header(stamp, t.optical_frame(v))
             img = images[v]
@@ -69,8 +73,8 @@ class SequenceBagWriter:
         self._writer.close()
 
 
-def write_sequence_bag(dataset, path, compressed: bool = False, start_time: float = 1.0,
-                       frame_period: float = 0.5, progress: bool = True) -> Path:
+def write_sequence_bag(dataset, path, compressed: bool = False, clock: SequenceClock = None,
+                       progress: bool = True) -> Path:
     """Write any MATRIX-format dataset (simulated or the real sample) as a sequence bag at ``path``.
 
     Args:
@@ -78,7 +82,7 @@ def write_sequence_bag(dataset, path, compressed: bool = False, start_time: floa
     """
     from tqdm import tqdm
 
-    with SequenceBagWriter(path, dataset.views, compressed, start_time, frame_period) as bag:
+    with SequenceBagWriter(path, dataset.views, compressed, clock) as bag:
         for i, frame in enumerate(tqdm(dataset.frames, desc='bag', unit='frame', disable=not progress)):
             images = {v: dataset.load_image(v, frame) for v in dataset.views}
             cameras = {v: dataset.camera(v, frame) for v in dataset.views}

@@ -5,6 +5,7 @@ import numpy as np
 import torch
 
 from matrix_core.bev.calibration_sources import calibration_source
+from matrix_core.bev.encoder import SmallEncoder
 from matrix_core.bev.lifting import feat_H_grid
 from matrix_core.bev.settings import BevSettings
 from matrix_core.bev.targets import bev_targets
@@ -71,7 +72,7 @@ class BevFrames(torch.utils.data.Dataset):
         self.use_views = set(views) if views else set(self.views)
         self.input_size = (settings.image_width, settings.image_height)
         self._cache = {} if cache_images else None
-        self.stride = 4
+        self.stride = SmallEncoder.stride  # input pixels per feature pixel, as BevFusionNet.stride
 
     def __len__(self) -> int:
         return len(self.frames)

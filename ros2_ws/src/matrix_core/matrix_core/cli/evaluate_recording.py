@@ -3,7 +3,8 @@
 REC is the ``recorder``'s bag folder (matrix_msgs/TrackArray tracks and detections, e.g. /tracks and
 /detections of the ``fuse`` node; its /bev_heatmap too, if recorded, fixes the grid) or its MOT text
 (``frame id x y``). SEQUENCE_BAG is the bag that was replayed (``/ground_truth/pedestrians``). Frames are
-``round((stamp - start) / period)``. Detection metrics are of the detections when recorded (else of the
+``round((stamp - start) / period)`` with the sequence clock stored in SEQUENCE_BAG (``--start-time`` and
+``--frame-period`` override it; bags written before the clock was stored get 1.0 s and 0.5 s). Detection metrics are of the detections when recorded (else of the
 tracks); tracking metrics of the tracks. Prints the table of ``evaluate`` and lists frames without tracks;
 ``--png`` draws the recorded tracks beside the ground-truth trajectories.
 """
@@ -20,8 +21,8 @@ def add_parser(subparsers) -> None:
     p.add_argument('--tracks-topic', default='/tracks', help='TrackArray topic of the tracks (default: /tracks)')
     p.add_argument('--detections-topic', default='/detections', help='TrackArray topic of the detections '
                    '(default: /detections)')
-    p.add_argument('--start-time', type=float, default=1.0, help='stamp of frame 0, seconds (default: 1.0)')
-    p.add_argument('--frame-period', type=float, default=0.5, help='seconds between frames (default: 0.5)')
+    p.add_argument('--start-time', type=float, help='stamp of frame 0, seconds (default: the sequence bag\'s)')
+    p.add_argument('--frame-period', type=float, help='seconds between frames (default: the sequence bag\'s)')
     p.add_argument('--area', type=float, nargs=4, metavar=('X0', 'Y0', 'X1', 'Y1'),
                    help='ground truth outside is ignored (default: the recorded heatmap grid, else none)')
     p.add_argument('--frames', type=int, nargs=2, metavar=('FIRST', 'LAST'), help='frame range (inclusive)')
@@ -33,16 +34,17 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    from matrix_core.fusion.recording import ground_truth_from_bag, read_recording, score_recording
+    from matrix_core.bags.clock import read_sequence_clock
+    from matrix_core.evaluation.recording import ground_truth_from_bag, read_recording, score_recording
     from matrix_core.metrics.report import format_metrics
 
-    if args.frame_period <= 0:
+    if args.frame_period is not None and args.frame_period <= 0:
         raise ValueError('--frame-period must be positive')
-    timing = {'start_time': args.start_time, 'frame_period': args.frame_period}
+    clock = read_sequence_clock(args.ground_truth).overridden(args.start_time, args.frame_period)
     recording = read_recording(args.recording, tracks_topic=args.tracks_topic,
-                               detections_topic=args.detections_topic, **timing) \
+                               detections_topic=args.detections_topic, clock=clock) \
         if Path(args.recording).is_dir() else read_recording(args.recording)
-    gt = ground_truth_from_bag(args.ground_truth, **timing)
+    gt = ground_truth_from_bag(args.ground_truth, clock)
     result = score_recording(recording, gt, args.area, args.frames, args.threshold, args.gate)
     gt_frames = sorted(set(result.gt.frames.tolist()))
     lost = sorted(set(gt_frames) - set(recording.track_frames)) if recording.track_frames is not None else None

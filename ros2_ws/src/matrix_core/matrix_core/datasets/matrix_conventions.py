@@ -117,6 +117,12 @@ def area_to_file(area) -> list:
     return [[float(x_min), float(x_max)], [0.0 - float(y_max), 0.0 - float(y_min)]]
 
 
+# The MATRIX square (0, -30, 30, 0): internal (x_min, y_min, x_max, y_max) metres. The one source of the
+# default area of every component (register, fuse, graph monitor, simulator); it is also the extent of the
+# positionID grid (300 x 300 cells of 0.1 m), so simulated areas must lie inside it.
+MATRIX_AREA = area_from_file(*ORIGINAL_AREA_FILE_XY)
+
+
 def pixels_from_file(uv_file) -> np.ndarray:
     """(N, 2) pixel coordinates read from MATRIX files -> internal pixel-centre coordinates."""
     return np.array(uv_file, dtype=np.float64, ndmin=2) - PIXEL_OFFSET

@@ -17,8 +17,6 @@ from matrix_core.fusion.settings import FuseSettings
 from matrix_core.fusion.views import ViewInput, ViewInputError, check_image
 from matrix_core.tracking import BevDetections, BevTracker
 
-STRIDE = 4  # input pixels per feature pixel of the encoder (BevFrames.stride)
-
 
 @dataclass(frozen=True)
 class TrackState:
@@ -107,8 +105,9 @@ class BevFuser:
         """(3, h, w) image and (3, 3) feat_H_grid of one usable view, as BevFrames builds them."""
         image = check_image(view.image)
         size = (image.shape[1], image.shape[0])
+        # the model's stride is its encoder's, the one BevFrames uses offline
         try:
-            fh = feat_H_grid(view.img_H_ground, self.grid.ground_H_grid, size, self.input_size, STRIDE)
+            fh = feat_H_grid(view.img_H_ground, self.grid.ground_H_grid, size, self.input_size, self.model.stride)
         except np.linalg.LinAlgError as exc:
             raise ViewInputError(f'ground homography unusable: {exc}') from None
         if not np.all(np.isfinite(fh)):

@@ -4,6 +4,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from matrix_core import topics
+from matrix_core.datasets.matrix_conventions import MATRIX_AREA
 from matrix_core.tracking.settings import TrackerSettings
 
 INPUT_KINDS = ('homography', 'camera_info')
@@ -42,7 +43,7 @@ class FuseSettings(TrackerSettings):
         'help': 'BEV model checkpoint (.pt); empty: the shipped matrix_core/bev/checkpoints/complex_quick.pt'})
     device: str = field(default='cpu', metadata={'help': 'torch device (the BEV runner decodes on the CPU)'})
     threads: int = field(default=1, metadata={'help': 'torch and OpenCV CPU threads (1: one core, as benchmarked)'})
-    area: list[float] = field(default_factory=lambda: [0.0, -30.0, 30.0, 0.0], metadata={
+    area: list[float] = field(default_factory=lambda: list(MATRIX_AREA), metadata={
         'help': 'scene x_min y_min x_max y_max (m) when the checkpoint has no area; the grid adds its margin'})
     score_threshold: float = field(default=-1.0, metadata={
         'help': 'heatmap peak threshold; negative: the checkpoint\'s'})

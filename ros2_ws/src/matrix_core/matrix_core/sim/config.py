@@ -5,8 +5,8 @@ three shipped variants live in ``matrix_core/sim/configs/{simple,complex,modifie
 the path of their own file. Unknown keys are rejected so that typos do not silently fall back to defaults.
 
 Convention: internal world frame (right-handed, metres, z up, ground z = 0). The real MATRIX square is
-x in [0, 30], y in [-30, 0]; areas must stay inside it because MATRIX positionIDs are a 300 x 300 grid of
-0.1 m cells.
+``MATRIX_AREA`` (x in [0, 30], y in [-30, 0]); areas must stay inside it because MATRIX positionIDs are a
+300 x 300 grid of 0.1 m cells.
 """
 
 import dataclasses
@@ -15,9 +15,10 @@ from pathlib import Path
 
 import yaml
 
+from matrix_core.datasets.matrix_conventions import MATRIX_AREA
+
 CONFIG_DIR = Path(__file__).resolve().parent / 'configs'
 VARIANTS = ('simple', 'complex', 'modified')
-POSITION_GRID_EXTENT = (0.0, -30.0, 30.0, 0.0)  # internal (x_min, y_min, x_max, y_max) of the positionID grid
 
 
 @dataclass
@@ -117,7 +118,7 @@ class SceneConfig:
     """One scene variant. ``area`` is the walkable square (x_min, y_min, x_max, y_max), internal metres."""
 
     name: str = 'complex'
-    area: list = field(default_factory=lambda: [0.0, -30.0, 30.0, 0.0])
+    area: list = field(default_factory=lambda: list(MATRIX_AREA))
     floor: str = 'cement'  # cement | cobblestone
     floor_color: list = field(default_factory=lambda: [178, 182, 186])  # BGR mean of the walkable floor
     markings: bool = True  # painted joint lines and the area outline
@@ -133,10 +134,10 @@ class SceneConfig:
         if self.floor not in ('cement', 'cobblestone'):
             raise ValueError(f'floor must be cement or cobblestone, got {self.floor!r}')
         x0, y0, x1, y1 = self.area
-        gx0, gy0, gx1, gy1 = POSITION_GRID_EXTENT
+        gx0, gy0, gx1, gy1 = MATRIX_AREA  # the positionID grid
         if not (gx0 <= x0 < x1 <= gx1 and gy0 <= y0 < y1 <= gy1):
             raise ValueError(f'area {self.area} must lie inside the MATRIX position grid '
-                             f'{POSITION_GRID_EXTENT}')
+                             f'{MATRIX_AREA}')
         if self.building_distance <= self.drones.ring_half_side + 2.0:
             raise ValueError('building_distance must be beyond the drone ring (+2 m)')
 

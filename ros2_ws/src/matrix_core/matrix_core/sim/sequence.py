@@ -115,7 +115,7 @@ def simulate(settings, progress: bool = True) -> Path:
     """Generate ``settings.frames`` frames into ``settings.out`` (see the module docstring)."""
     from tqdm import tqdm
 
-    from matrix_core.bags import SequenceBagWriter
+    from matrix_core.bags import SequenceBagWriter, SequenceClock
     from matrix_core.datasets import open_dataset
 
     out = Path(settings.out)
@@ -133,8 +133,8 @@ def simulate(settings, progress: bool = True) -> Path:
         cam = sim.fleet.reference_camera(k, settings.width, settings.height)
         writer.write_image(view, 0, sim.renderer.render(cam, None)[0], reference=True)
         writer.write_camera(view, 0, cam, reference=True)
-    bag = (SequenceBagWriter(out / 'bag', sim.views, settings.compressed, settings.start_time,
-                             settings.frame_period) if settings.bag else None)
+    clock = SequenceClock(settings.start_time, settings.frame_period)
+    bag = SequenceBagWriter(out / 'bag', sim.views, settings.compressed, clock) if settings.bag else None
     if bag is not None:
         bag.__enter__()
     try:

@@ -2,6 +2,8 @@
 
 from dataclasses import dataclass, field
 
+from matrix_core.bags.clock import DEFAULT_CLOCK
+
 
 @dataclass
 class SimulateSettings:
@@ -21,8 +23,10 @@ class SimulateSettings:
         'help': 'bag images as sensor_msgs/CompressedImage (JPEG) instead of sensor_msgs/Image'})
     replay: str = field(default='', metadata={
         'help': 'MATRIX folder whose matchings/Pedestrians trajectories replace the crowd model'})
-    frame_period: float = field(default=0.5, metadata={'help': 'seconds between frames'})
-    start_time: float = field(default=1.0, metadata={'help': 'bag header stamp of the first frame, seconds'})
+    frame_period: float = field(default=DEFAULT_CLOCK.frame_period, metadata={
+        'help': 'seconds between frames'})
+    start_time: float = field(default=DEFAULT_CLOCK.start_time, metadata={
+        'help': 'bag header stamp of the first frame, seconds'})
 
     def __post_init__(self):
         if self.fast:

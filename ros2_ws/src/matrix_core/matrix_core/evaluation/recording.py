@@ -1,8 +1,9 @@
 """Scoring what a live graph recorded (the ``recorder``'s bag and/or MOT text) against a sequence bag's
 ground truth, with the same metrics as the offline ``evaluate``.
 
-Frames: ``frame = round((stamp - start_time) / frame_period)`` for every stamped message (the recorder's
-MOT text already holds frames computed that way). Ground truth: ``/ground_truth/pedestrians`` (+ ids) of
+Frames: ``frame = round((stamp - start_time) / frame_period)`` for every stamped message, with the sequence
+clock (:mod:`matrix_core.bags.clock`) stored in the sequence bag (the recorder's MOT text already holds frames
+computed that way). Ground truth: ``/ground_truth/pedestrians`` (+ ids) of
 the sequence bag. As offline, ground truth outside the fused BEV grid is ignored; the grid comes from
 ``area`` or, when the recording holds the fuse node's heatmap (nav_msgs/OccupancyGrid), from its bounds.
 Recorded message types come from the definitions embedded in the bag (matrix_msgs needs no ROS install).
@@ -16,6 +17,8 @@ from rosbags.highlevel import AnyReader
 
 from matrix_core.bags import read_bag
 from matrix_core import topics as bag_topics
+from matrix_core.bags.clock import SequenceClock, read_sequence_clock
+from matrix_core.bags.messages import stamp_ns
 from matrix_core.metrics import BevPoints, detection_metrics, read_bev_points, tracking_metrics
 
 TRACK_ARRAY = 'matrix_msgs/msg/TrackArray'
@@ -43,13 +46,14 @@ class RecordingScores:
     recording: Recording
 
 
-def _frame(stamp_ns: int, start_time: float, frame_period: float) -> int:
-    return int(round((stamp_ns * 1e-9 - start_time) / frame_period))
+def read_recording_bag(path, tracks_topic='/tracks', detections_topic='/detections',
+                       clock: SequenceClock = None) -> Recording:
+    """Tracks, detections and the heatmap grid bounds from a recorder bag (topics missing -> None).
 
-
-def read_recording_bag(path, tracks_topic='/tracks', detections_topic='/detections', start_time=1.0,
-                       frame_period=0.5) -> Recording:
-    """Tracks, detections and the heatmap grid bounds from a recorder bag (topics missing -> None)."""
+    Args:
+        clock: numbers the frames (pass the sequence bag's); default: the clock the recorder stored.
+    """
+    clock = clock or read_sequence_clock(path)
     tracks, dets = ([], [], [], []), ([], [], [])
     track_frames, area = set(), None
     with AnyReader([Path(path)]) as reader:
@@ -61,8 +65,7 @@ def read_recording_bag(path, tracks_topic='/tracks', detections_topic='/detectio
             if conn.msgtype not in (TRACK_ARRAY, OCCUPANCY_GRID):
                 continue
             msg = reader.deserialize(raw, conn.msgtype)
-            stamp = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
-            frame = _frame(stamp, start_time, frame_period)
+            frame = clock.frame_ns(stamp_ns(msg.header))
             if conn.msgtype == OCCUPANCY_GRID:
                 i = msg.info
                 x0, y0 = i.origin.position.x, i.origin.position.y
@@ -97,13 +100,14 @@ def read_recording(path, **kwargs) -> Recording:
     raise FileNotFoundError(f'{path}: neither a rosbag2 folder nor a MOT text file')
 
 
-def ground_truth_from_bag(path, start_time=1.0, frame_period=0.5) -> BevPoints:
-    """``frame id x y`` of every person in a sequence bag's ``/ground_truth/pedestrians`` (+ ids)."""
+def ground_truth_from_bag(path, clock: SequenceClock = None) -> BevPoints:
+    """``frame id x y`` of every person in a sequence bag's ``/ground_truth/pedestrians`` (+ ids); frames by
+    ``clock`` (default: the one the bag stores)."""
+    clock = clock or read_sequence_clock(path)
     poses, ids = {}, {}
     for bm in read_bag(path, [bag_topics.PEDESTRIANS_TOPIC, bag_topics.PEDESTRIAN_IDS_TOPIC]):
         if bm.topic == bag_topics.PEDESTRIANS_TOPIC:
-            stamp = int(bm.msg.header.stamp.sec) * 1_000_000_000 + int(bm.msg.header.stamp.nanosec)
-            poses[bm.time_ns] = (stamp, [(p.position.x, p.position.y) for p in bm.msg.poses])
+            poses[bm.time_ns] = (stamp_ns(bm.msg.header), [(p.position.x, p.position.y) for p in bm.msg.poses])
         else:
             ids[bm.time_ns] = [int(i) for i in bm.msg.data]
     if not poses:
@@ -113,7 +117,7 @@ def ground_truth_from_bag(path, start_time=1.0, frame_period=0.5) -> BevPoints:
         frame_ids = ids.get(time_ns)
         if frame_ids is None or len(frame_ids) != len(points):
             raise ValueError(f'{path}: pedestrian ids missing or not matching the poses at t={stamp * 1e-9:.3f} s')
-        frames += [_frame(stamp, start_time, frame_period)] * len(points)
+        frames += [clock.frame_ns(stamp)] * len(points)
         pids += frame_ids
         xy += points
     return BevPoints(frames, np.reshape(xy, (-1, 2)), ids=pids)

@@ -10,7 +10,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from matrix_core.cli.main import main as cli
-from matrix_core.fusion.recording import ground_truth_from_bag, read_recording_bag
+from matrix_core.evaluation.recording import ground_truth_from_bag, read_recording_bag
 from matrix_core.metrics import BevPoints, write_bev_points
 
 MSG_DIR = Path(__file__).resolve().parents[2] / 'ros2_ws/src/matrix_msgs/msg'
