@@ -26,7 +26,7 @@ import numpy as np
 from matrix_core.calib.evaluation import pose_errors
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
-from matrix_core.calib.tracker import OK, DroneCalibrator
+from matrix_core.calib.drone_calibrator import OK, DroneCalibrator
 from matrix_core.datasets import MatrixDataset
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 

@@ -18,7 +18,7 @@ from tqdm import tqdm
 from matrix_core.calib.evaluation import pose_errors, summarize_errors
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
-from matrix_core.calib.tracker import OK, DroneCalibrator
+from matrix_core.calib.drone_calibrator import OK, DroneCalibrator
 from matrix_core.datasets import DatasetError, MatrixDataset, MatrixWriter, open_dataset
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
