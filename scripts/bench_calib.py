@@ -23,10 +23,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from matrix_core.calib.drone_calibrator import OK, DroneCalibrator
 from matrix_core.calib.evaluation import pose_errors
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
-from matrix_core.calib.tracker import OK, DroneCalibrator
 from matrix_core.datasets import MatrixDataset
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
@@ -72,10 +72,9 @@ def bench(dataset, scale, repeat, settings):
 
 
 def bench_sim(frames: int, overrides: dict):
-    from matrix_core.calib.cli_support import simulated_sequence
     from matrix_core.calib.evaluation import summarize_errors
     from matrix_core.calib.scene import default_config_path
-    from matrix_core.cli.calibrate import calibrate_dataset
+    from matrix_core.cli.calibrate import calibrate_dataset, simulated_sequence
     from matrix_core.datasets import open_dataset
 
     for variant in ('simple', 'complex', 'modified'):

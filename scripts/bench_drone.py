@@ -26,10 +26,10 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from matrix_core.calib.cli_support import simulated_sequence
+from matrix_core.calib.drone_calibrator import OK, DroneCalibrator
 from matrix_core.calib.scene import config_for_dataset, load_scene
 from matrix_core.calib.settings import CalibSettings
-from matrix_core.calib.tracker import OK, DroneCalibrator
+from matrix_core.cli.calibrate import simulated_sequence
 from matrix_core.datasets import MatrixDataset
 from matrix_core.geometry.camera import rotation_angle_deg
 from matrix_core.register.registrar import Registrar

@@ -1,4 +1,5 @@
-"""The core package must never import rclpy or ROS message/interface packages (algorithms apart from ROS)."""
+"""The core package must never import rclpy or ROS message/interface packages (algorithms apart from ROS), and
+no core module outside ``matrix_core.cli`` imports the CLI (the CLI calls the algorithms, never the reverse)."""
 
 import ast
 import subprocess
@@ -24,6 +25,16 @@ def imported_modules(path: Path) -> set:
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
             names.add(node.module)
     return names
+
+
+def imports_cli(path: Path) -> bool:
+    """Whether a Python file imports ``matrix_core.cli`` (or a module in it) at any depth."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module == 'matrix_core' and node.level == 0:
+            if any(a.name == 'cli' for a in node.names):
+                return True
+    return any(m == 'matrix_core.cli' or m.startswith('matrix_core.cli.') for m in imported_modules(path))
 
 
 def test_forbidden_detector_catches_ros_imports(tmp_path):
@@ -63,3 +74,21 @@ print(count)
     result = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     assert int(result.stdout.strip()) > 10
+
+
+def test_cli_detector_catches_cli_imports(tmp_path):
+    for i, source in enumerate(('def f():\n    from matrix_core.cli.main import main\n',
+                                'import matrix_core.cli.calibrate\n', 'from matrix_core import cli, geometry\n')):
+        path = tmp_path / f'bad{i}.py'
+        path.write_text(source)
+        assert imports_cli(path), source
+    fine = tmp_path / 'fine.py'
+    fine.write_text('from matrix_core.calib import scene\nimport matrix_core.client_side\n')
+    assert not imports_cli(fine)
+
+
+def test_no_core_module_imports_the_cli():
+    files = sorted(p for p in CORE.rglob('*.py') if 'cli' not in p.relative_to(CORE).parts[:1])
+    assert len(files) > 10
+    offenders = [str(p.relative_to(CORE)) for p in files if imports_cli(p)]
+    assert not offenders, f'core modules outside matrix_core/cli import the CLI: {offenders}'

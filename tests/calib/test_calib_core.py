@@ -1,4 +1,4 @@
-"""Calibration core on the real MATRIX sample: boards, detection, assignment, tracker states, CLI."""
+"""Calibration core on the real MATRIX sample: boards, detection, assignment, calibrator states, CLI."""
 
 import csv
 
@@ -8,13 +8,13 @@ import pytest
 
 from matrix_core.calib.assignment import assign_piece
 from matrix_core.calib.detection import find_pieces
+from matrix_core.calib.drone_calibrator import FAILED, OK, STALE, DroneCalibrator
 from matrix_core.calib.evaluation import pose_errors
 from matrix_core.calib.grow import best_correction, saddle_map
 from matrix_core.calib.motion import GroundMotion
 from matrix_core.calib.regions import board_rectification, image_H_board
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
-from matrix_core.calib.tracker import FAILED, OK, STALE, DroneCalibrator
 from matrix_core.cli.main import main as cli_main
 from matrix_core.datasets import MatrixDataset, open_dataset
 from matrix_core.datasets import matrix_conventions as conv
@@ -37,6 +37,13 @@ def _true_indices(camera, board, uv):
     proj = camera.project(board.corners_world())
     d = np.linalg.norm(uv[:, None] - proj[None], axis=2)
     return board.corner_indices()[d.argmin(axis=1)], d.min(axis=1)
+
+
+def outline_world(board, margin_cells: float = 1.0) -> np.ndarray:
+    """(4, 3) world corners of ``board``'s outer edge grown by ``margin_cells`` squares beyond it."""
+    # The outer edge runs through corner coordinates -1 and nx (ny): the border squares end there.
+    lo, hi_i, hi_j = -1.0 - margin_cells, board.nx + margin_cells, board.ny + margin_cells
+    return board.points([lo, hi_i, hi_i, lo], [lo, lo, hi_j, hi_j])
 
 
 def test_board_config_matches_the_marker_files(dataset, scene):
@@ -234,7 +241,7 @@ def test_hidden_boards_are_not_tracked(dataset, scene):
     image = dataset.load_image(view, 1)
     truth = scene.camera(dataset.camera(view, 1).cam_T_world)
     for board in scene.boards:
-        outline = truth.project(board.outline_world(margin_cells=2.0))
+        outline = truth.project(outline_world(board, margin_cells=2.0))
         cv2.fillConvexPoly(image, np.round(outline).astype(np.int32), (128, 128, 128))
     r = cal.process(image, 0.5)
     assert r.status == STALE and not r.tracked and 'detect' in r.timings_s
@@ -245,21 +252,21 @@ def test_hidden_boards_are_not_tracked(dataset, scene):
 def test_an_opencv_error_in_one_frame_leaves_the_calibrator_working(dataset, scene, monkeypatch):
     """An OpenCV assertion inside one frame's calibration (injected into the board search) gives that frame
     a stale result with the reason, and the next frame calibrates normally."""
-    import matrix_core.calib.tracker as tracker_module
+    import matrix_core.calib.board_search as search_module
 
     view = 'D5'
     cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view),
                           dataset.reference_image(view))
     assert cal.process(dataset.load_image(view, 0), 0.0).status == OK
-    real_find_pieces = tracker_module.find_pieces
+    real_find_pieces = search_module.find_pieces
 
     def asserting_find_pieces(*args, **kwargs):
         raise cv2.error('injected: (-215:Assertion failed) in function find_pieces')
 
-    monkeypatch.setattr(tracker_module, 'find_pieces', asserting_find_pieces)
+    monkeypatch.setattr(search_module, 'find_pieces', asserting_find_pieces)
     r = cal.process(dataset.load_image(view, 1), 0.5)
     assert r.status == STALE and 'OpenCV error' in r.message and r.camera is cal.last_good
-    monkeypatch.setattr(tracker_module, 'find_pieces', real_find_pieces)
+    monkeypatch.setattr(search_module, 'find_pieces', real_find_pieces)
     r = cal.process(dataset.load_image(view, 2), 1.0)
     assert r.status == OK
     rot, centre = pose_errors(r.camera, dataset.camera(view, 2))

@@ -8,11 +8,10 @@ The issue's acceptance asks for >= 50 frames x 8 drones per variant; that takes 
 import numpy as np
 import pytest
 
-from matrix_core.calib.cli_support import simulated_sequence
 from matrix_core.calib.evaluation import summarize_errors
 from matrix_core.calib.scene import default_config_path
 from matrix_core.calib.settings import CalibSettings
-from matrix_core.cli.calibrate import calibrate_dataset
+from matrix_core.cli.calibrate import calibrate_dataset, simulated_sequence
 from matrix_core.datasets import open_dataset
 
 FRAMES = 6

@@ -6,10 +6,10 @@ import cv2
 import numpy as np
 import pytest
 
+from matrix_core.calib.drone_calibrator import FAILED, OK, DroneCalibrator
 from matrix_core.calib.evaluation import pose_errors
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
-from matrix_core.calib.tracker import FAILED, OK, DroneCalibrator
 from matrix_core.datasets import MatrixDataset
 from matrix_core.register.registrar import Registrar
 from matrix_core.register.scene import settings_for_dataset

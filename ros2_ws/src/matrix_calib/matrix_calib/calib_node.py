@@ -39,7 +39,7 @@ from std_msgs.msg import Header
 
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
-from matrix_core.calib.tracker import FAILED, OK, DroneCalibrator
+from matrix_core.calib.drone_calibrator import FAILED, OK, DroneCalibrator
 from matrix_core.datasets import DatasetError, MatrixDataset
 from matrix_core.fusion.views import img_H_ground_from_registration
 from matrix_core.sync import FrameSynchronizer, FrameSyncSettings

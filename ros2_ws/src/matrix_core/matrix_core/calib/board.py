@@ -67,9 +67,3 @@ class Checkerboard:
         """+1 for light, -1 for dark cells (a, b) (arrays); meaningful for cells on the board only."""
         s = 1 - 2 * ((np.asarray(a) + np.asarray(b)) % 2)
         return s if self.first_cell_light else -s
-
-    def outline_world(self, margin_cells: float = 1.0) -> np.ndarray:
-        """(4, 3) world corners of the board's outer edge grown by ``margin_cells`` squares beyond it."""
-        # The outer edge runs through corner coordinates -1 and nx (ny): the border squares end there.
-        lo, hi_i, hi_j = -1.0 - margin_cells, self.nx + margin_cells, self.ny + margin_cells
-        return self.points([lo, hi_i, hi_i, lo], [lo, lo, hi_j, hi_j])

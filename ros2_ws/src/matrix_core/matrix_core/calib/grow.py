@@ -10,7 +10,8 @@ it barely moved and the four squares around it form a dark/light saddle of stron
 
 The verified saddles then decide the whole-square correction ``d``: the true board must cover as many
 verified saddles of the right colour as possible, and ground beyond its edges has none. The corrected
-correspondences (true index = predicted index + ``d``) are returned for the final PnP.
+correspondences (true index = predicted index + ``d``) are returned for the final PnP; :func:`grow_pose`
+does all of it, solving the pose again from the verified corners until it settles.
 """
 
 from dataclasses import dataclass
@@ -19,8 +20,14 @@ import cv2
 import numpy as np
 
 from matrix_core.calib.board import Checkerboard
+from matrix_core.calib.pnp import solve_pnp
 from matrix_core.calib.regions import image_H_board
-from matrix_core.geometry.camera import Camera
+from matrix_core.calib.scene import CalibScene
+from matrix_core.calib.settings import CalibSettings
+from matrix_core.geometry.camera import Camera, rotation_angle_deg
+
+GROW_SHIFT = 4  # largest whole-square correction considered (the initial prior can be squares off)
+SETTLED_DEG, SETTLED_M = 0.03, 0.015  # a re-solved pose this close to the last one has settled
 
 
 @dataclass
@@ -132,3 +139,41 @@ def corrected_correspondences(maps: list, correction: tuple) -> tuple:
         world.append(m.board.points(t[keep, 0], t[keep, 1]))
         uv.append(m.uv[keep])
     return np.concatenate(world) if world else np.zeros((0, 3)), np.concatenate(uv) if uv else np.zeros((0, 2))
+
+
+def _saddle_maps(gray: np.ndarray, camera: Camera, scene: CalibScene, settings: CalibSettings) -> list:
+    return [saddle_map(gray, camera, board, settings.px_per_square, extend=GROW_SHIFT + 1)
+            for board in scene.boards]
+
+
+def grow_pose(gray: np.ndarray, camera: Camera, scene: CalibScene, settings: CalibSettings, rounds: int = 1):
+    """(PnPResult or None, whole-square correction or None when ambiguous) of the (H, W) grey image, from
+    the rough pose ``camera``.
+
+    The grown pose is verified once more: at the final pose the saddles must put the board exactly
+    where the pose does (correction (0, 0)); otherwise the correction counts as ambiguous (None).
+    With ``rounds`` > 1 the pose is solved again from the saddles verified at the new pose until it
+    settles: a rough starting pose verifies only the corners it predicts to a fraction of a square, and
+    corners refined in a view rectified with a wrong pose are biased towards it (measured: a start
+    0.2 deg off gave 0.1 deg after one round, 0.015 once settled). Each round is one more saddle pass."""
+    maps = _saddle_maps(gray, camera, scene, settings)
+    correction, count = best_correction(maps, GROW_SHIFT)
+    if correction is None or count < settings.min_corners:
+        return None, correction
+    total, previous = (0, 0), camera
+    for round_ in range(rounds):
+        world, uv = corrected_correspondences(maps, correction)
+        fit = solve_pnp(world, uv, scene.camera(np.eye(4)), settings.ransac_threshold_px)
+        if fit is None:
+            return None, correction
+        total = (total[0] + correction[0], total[1] + correction[1])
+        maps = _saddle_maps(gray, fit.camera, scene, settings)
+        correction, verified = best_correction(maps, GROW_SHIFT)
+        if correction != (0, 0):
+            return None, None
+        settled = (verified <= count * 1.02 and rotation_angle_deg(fit.camera.R, previous.R) < SETTLED_DEG
+                   and np.linalg.norm(fit.camera.center - previous.center) < SETTLED_M)
+        if settled or round_ == rounds - 1:
+            return fit, total
+        count, previous = verified, fit.camera
+    return None, None   # not reached

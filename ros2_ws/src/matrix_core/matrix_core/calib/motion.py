@@ -6,6 +6,10 @@ pose's ground projection with this homography predicts every board corner to a f
 most frames (measured on the real sample), which both places the search windows and nearly names the
 corners. People and the central block are RANSAC outliers; the ground dominates the view.
 
+When the homography fails, a phase correlation of two small grey images gives at least the global
+translation (:mod:`matrix_core.calib.regions`). :class:`PriorImageMotion` measures either from the image the
+prior pose belongs to.
+
 Convention: ``cur_H_prev`` maps full-resolution pixels (pixel-centre convention) of the previous image
 to the current image.
 """
@@ -15,9 +19,12 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from matrix_core.calib.regions import image_shift, small_gray, translation
+from matrix_core.calib.settings import CalibSettings
+
 
 # LSH: about 35 ms instead of 100-150 ms for 3000 x 3000 binary descriptors, slightly worse priors
-# (its hash tables draw from OpenCV's RNG, which the tracker seeds per image).
+# (its hash tables draw from OpenCV's RNG, which the calibrator seeds per image).
 MATCHERS = {'lsh': lambda: cv2.FlannBasedMatcher(dict(algorithm=6, table_number=6, key_size=12, multi_probe_level=1),
                                                  dict(checks=50)),
             'brute': lambda: cv2.BFMatcher(cv2.NORM_HAMMING)}
@@ -58,7 +65,7 @@ class GroundMotion:
         name = matcher or self.matcher
         if name not in MATCHERS:
             raise ValueError(f'matcher must be one of {sorted(MATCHERS)}, got {name!r}')
-        if name not in self.matchers:   # made on first use: most trackers only ever use one
+        if name not in self.matchers:   # made on first use: most calibrators only ever use one
             self.matchers[name] = MATCHERS[name]()
         pairs = self.matchers[name].knnMatch(previous.descriptors, current.descriptors, k=2)
         good = [p[0] for p in pairs if len(p) == 2 and p[0].distance < self.ratio * p[1].distance]
@@ -72,3 +79,56 @@ class GroundMotion:
         if H is None or inliers < self.min_inliers or not np.all(np.isfinite(H)):
             return None, inliers
         return H / H[2, 2], inliers
+
+
+class PriorImageMotion:
+    """The image motion from the image the prior pose belongs to (the last good frame, or the reference
+    image) to the current one: the ORB ground homography, else the phase-correlation shift.
+
+    Args:
+        settings: ``motion_*`` and ``global_shift_scale`` (0 = that measure off).
+        prior_gray: (H, W) uint8 image of the first prior (the reference image), optional.
+    """
+
+    def __init__(self, settings: CalibSettings, prior_gray: np.ndarray = None):
+        self.settings = settings
+        self.ground = GroundMotion(settings.motion_scale, settings.motion_features, matcher=settings.motion_matcher) \
+            if settings.motion_scale > 0 else None
+        self.prior_features = self.prior_small = None
+        self.prior_gray = prior_gray
+
+    def measure(self, gray: np.ndarray) -> tuple:
+        """(ORB features or None, small grey image or None) of an (H, W) uint8 image: its motion data."""
+        s = self.settings
+        features = self.ground.features(gray) if self.ground is not None else None
+        small = small_gray(gray, s.global_shift_scale) if s.global_shift_scale > 0 else None
+        return features, small
+
+    def remember(self, gray: np.ndarray, motion_data: tuple = None) -> None:
+        """Make ``gray`` the prior's image; its ``motion_data`` is measured only if a later frame needs it."""
+        if motion_data is None:
+            self.prior_gray, self.prior_features, self.prior_small = gray, None, None
+        else:
+            self.prior_gray, (self.prior_features, self.prior_small) = None, motion_data
+
+    def _measure_prior(self) -> None:
+        """Measure the prior's image now that a frame needs it (kept as a grey image till then: frames guided
+        by a registration never need it)."""
+        if self.prior_gray is not None:
+            self.prior_features, self.prior_small = self.measure(self.prior_gray)
+            self.prior_gray = None
+
+    def since_prior(self, motion_data: tuple, matcher: str = '') -> tuple:
+        """(cur_H_prev (3, 3) or None, how it was measured, whether it is a full ground homography) from the
+        current image's ``motion_data`` (ORB ``matcher``, '' = ``motion_matcher``)."""
+        self._measure_prior()
+        features, small = motion_data
+        H, how = None, 'none'
+        if features is not None and self.prior_features is not None:
+            H, inliers = self.ground.homography(self.prior_features, features, matcher)
+            how = f'homography ({inliers} inliers)' if H is not None else f'homography failed ({inliers})'
+        homography = H is not None
+        if H is None and small is not None and self.prior_small is not None:
+            H = translation(image_shift(self.prior_small, small, self.settings.global_shift_scale))
+            how = 'shift' if how == 'none' else f'{how}; shift'
+        return H, how, homography

@@ -48,6 +48,11 @@ def image_H_board(camera: Camera, board: Checkerboard, cur_H_prev=None) -> np.nd
     return H if cur_H_prev is None else np.asarray(cur_H_prev, dtype=np.float64) @ H
 
 
+def predict_boards(boards: list, camera: Camera, cur_H_prev=None) -> dict:
+    """Board name -> (3, 3) current image pixels <- corner indices, for every board (see :func:`image_H_board`)."""
+    return {board.name: image_H_board(camera, board, cur_H_prev) for board in boards}
+
+
 def board_rectification(img_H_ij: np.ndarray, board: Checkerboard, camera: Camera,
                         px_per_square: float = 10.0, margin_cells: float = 3.0):
     """Homography and size of a fronto-parallel view of ``board`` predicted by ``img_H_ij``.

@@ -6,6 +6,7 @@ else from the config's ``initial_poses``). Writes ``DIR/calibrations/{intrinsic,
 dataset's own file format and world frame (with links to the images in ``DIR/image_subsets``, so that
 ``open_dataset(DIR)`` reads it like any MATRIX folder) and ``DIR/calibration_status.csv``.
 Frames that end stale are written with the last good pose (the table says so); failed ones are not written.
+:func:`simulated_sequence` makes a sequence to calibrate (the calibration's tests and benchmarks).
 """
 
 import csv
@@ -14,10 +15,11 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from matrix_core.calib.drone_calibrator import OK, DroneCalibrator
 from matrix_core.calib.evaluation import pose_errors, summarize_errors
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
-from matrix_core.calib.tracker import OK, DroneCalibrator
+from matrix_core.cli.main import main as cli_main
 from matrix_core.datasets import DatasetError, MatrixDataset, MatrixWriter, open_dataset
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
@@ -95,6 +97,17 @@ def _link_image(dataset, out: Path, view: str, frame: int) -> None:
     dst.parent.mkdir(parents=True, exist_ok=True)
     if not dst.exists():
         os.symlink(src, dst)
+
+
+def simulated_sequence(variant: str, frames: int, seed: int, out) -> Path:
+    """Write ``frames`` frames of simulator ``variant`` to ``out`` (MATRIX format) and return ``out``: the
+    sequence ``matrix-tracker simulate`` writes, so that tests and benchmarks calibrate what a user would."""
+    out = Path(out)
+    code = cli_main(['simulate', '--config', variant, '--frames', str(frames), '--seed', str(seed),
+                     '--out', str(out)])
+    if code != 0:
+        raise RuntimeError(f'matrix-tracker simulate {variant} failed with exit code {code}')
+    return out
 
 
 def run(args) -> int:
