@@ -62,7 +62,7 @@ def bench(root: Path, calib_settings: CalibSettings, registration_prior: bool) -
                 t = time.perf_counter()
                 r = registrar.register(image, frame)
                 register_ms.append(1000 * (time.perf_counter() - t))
-                guide = np.linalg.inv(r.ground_H_img) if registration_prior and r.ok else None
+                guide = r if registration_prior else None
                 t = time.perf_counter()
                 c = calibrator.process(image, PERIOD_S * index, guide)
                 calib_ms.append(1000 * (time.perf_counter() - t))

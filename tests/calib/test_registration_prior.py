@@ -1,4 +1,4 @@
-"""Calibration guided by the drone's registration (``DroneCalibrator.process(..., img_H_ground)``), on the
+"""Calibration guided by the drone's registration (``DroneCalibrator.process(..., registration)``), on the
 real MATRIX sample: the registration of each frame to the drone's reference implies a camera that predicts
 the boards; their corners are refined and verified without a checkerboard search (``track_registered``)."""
 
@@ -12,6 +12,7 @@ from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.datasets import MatrixDataset
 from matrix_core.register.registrar import Registrar
+from matrix_core.register.registration import Registration
 from matrix_core.register.scene import settings_for_dataset
 from matrix_core.register.settings import RegisterSettings
 
@@ -41,7 +42,7 @@ def test_every_real_frame_is_calibrated_from_its_registration(dataset):
             image = dataset.load_image(view, frame)
             registration = registrar.register(image, frame)
             assert registration.ok, (view, frame, registration.message)
-            r = calibrator.process(image, 0.5 * index, np.linalg.inv(registration.ground_H_img))
+            r = calibrator.process(image, 0.5 * index, registration)
             assert r.status == OK and r.tracked and r.motion == 'registration', (view, frame, r.message)
             assert 'detect' not in r.timings_s and calibrator.previous_features is None
             rot, centre = pose_errors(r.camera, dataset.camera(view, frame))
@@ -55,7 +56,7 @@ def test_an_unusable_registration_falls_back_to_the_image_motion(dataset):
     not_rigid = truth.img_H_ground() @ np.diag([1.0, 1.3, 1.0])   # squashed: no camera with this K
     for k, (H, why) in enumerate([(np.full((3, 3), np.nan), 'registration homography unusable'),
                                   (not_rigid, 'registration not a rigid camera')]):
-        r = calibrator.process(dataset.load_image('D5', k), 0.5 * k, H)
+        r = calibrator.process(dataset.load_image('D5', k), 0.5 * k, Registration.from_img_H_ground(H))
         assert r.status == OK and r.motion.startswith(why) and 'homography (' in r.motion, r.motion
         assert 'detect' in r.timings_s   # searched where the image motion put the boards
 
@@ -69,7 +70,7 @@ def test_a_pose_that_disagrees_with_the_registration_is_rejected(dataset):
         registration = registrar.register(image, 0)
         ground_T_moved = np.array([[1.0, 0.0, shift_m], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
         wrong = np.linalg.inv(registration.ground_H_img) @ np.linalg.inv(ground_T_moved)
-        r = calibrator.process(image, 0.0, wrong)
+        r = calibrator.process(image, 0.0, Registration.from_img_H_ground(wrong))
         assert r.status == FAILED and r.camera is None, r.message
         apart_m = float(r.message.split(' m from the camera the registration implies (> 0.3)')[0])
         assert abs(apart_m - shift_m) < 0.05, r.message

@@ -7,7 +7,7 @@ Status of each result:
     - ``failed``: no good pose yet (since the start); ``camera`` is None, nothing to publish.
 
 Where the boards are predicted from, first match wins:
-    1. the frame's registration (``img_H_ground``), when it implies a rigid camera (:mod:`.guided`): its
+    1. the frame's registration (a :class:`~matrix_core.register.registration.Registration`), when it implies a rigid camera (:mod:`.guided`): its
        corners are tracked (``track_registered``, :mod:`.corner_tracking`), else searched near it;
     2. the prior pose (last good frame, or the initial prior) carried into this image by the image motion
        (:class:`~matrix_core.calib.motion.PriorImageMotion`): opt-in ``track_corners`` tracks the corners
@@ -34,6 +34,7 @@ from matrix_core.calib.regions import predict_boards
 from matrix_core.calib.scene import CalibScene
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.geometry.camera import Camera, rotation_angle_deg
+from matrix_core.register.registration import Registration
 
 OK, STALE, FAILED = 'ok', 'stale', 'failed'
 
@@ -54,6 +55,13 @@ class CalibResult:
     motion: str = ''
     message: str = ''
     timings_s: dict = field(default_factory=dict)
+
+    def diagnostics(self) -> dict:
+        """The figures a node reports per image (text values, as diagnostic_msgs/KeyValue carries them)."""
+        return {'status': self.status, 'reprojection_rms_px': f'{self.rms_px:.3f}', 'corners': str(self.corners),
+                'pieces_found': str(self.pieces_found), 'pieces_assigned': str(self.pieces_assigned),
+                'age_s': f'{self.age_s:.3f}', 'full_search': str(self.full_search), 'tracked': str(self.tracked),
+                'guide': self.motion}
 
 
 @dataclass
@@ -105,19 +113,24 @@ class DroneCalibrator:
         """ORB features of the prior's image, None until a frame needed them (see :class:`PriorImageMotion`)."""
         return self.image_motion.prior_features
 
-    def set_intrinsics(self, K, dist, image_size) -> None:
-        """Use other intrinsics from now on (e.g. from a CameraInfo stream)."""
+    def set_intrinsics(self, K, dist, image_size) -> bool:
+        """Use other intrinsics from now on (e.g. from a CameraInfo stream); False (nothing changed) when they
+        equal the current ones."""
+        if (np.allclose(K, self.scene.K) and np.allclose(dist, self.scene.dist)
+                and tuple(image_size) == tuple(self.scene.image_size)):
+            return False
         self.scene = self.scene.with_intrinsics(K, dist, image_size)
         if self.prior is not None:
             self.prior = self.scene.camera(self.prior.cam_T_world)
+        return True
 
-    def process(self, image: np.ndarray, stamp: float, img_H_ground: np.ndarray = None) -> CalibResult:
+    def process(self, image: np.ndarray, stamp: float, registration: Registration = None) -> CalibResult:
         """Calibrate from one (H, W, 3) BGR or (H, W) grey uint8 image taken at ``stamp`` seconds.
 
-        ``img_H_ground`` (3, 3), optional: this image's homography from the ground (z = 0, world metres) to
-        its pixels, e.g. the inverse of the drone's registration ``H_img_to_ground``. When it implies a rigid
-        camera with these intrinsics, that camera predicts the boards (a prior independent of earlier
-        frames) and the image motion is not measured."""
+        ``registration``, optional: the drone's registration of this image (failed, unusable or absent: the
+        image motion guides). When its ground homography implies a rigid camera with these intrinsics, that
+        camera predicts the boards (a prior independent of earlier frames) and the image motion is not
+        measured."""
         t_start = time.perf_counter()
         # Every RANSAC below draws from OpenCV's global RNG: seeding it per image makes the result depend on
         # this image and this drone's history only, not on other drones sharing the process.
@@ -130,7 +143,7 @@ class DroneCalibrator:
             return CalibResult(FAILED, None, message='no pose prior (configure an initial pose)')
         frame = _Frame(gray, stamp, t_start)
         try:
-            guide, how = registered_camera(self.scene, img_H_ground)
+            guide, how = registered_camera(self.scene, registration)
             return self._guided(frame, guide, how) if guide is not None else self._from_prior(frame, how)
         except cv2.error as exc:   # an OpenCV assertion on one odd frame must not end the drone's calibration
             return self._stale(stamp, f'OpenCV error, frame skipped: {str(exc).strip().splitlines()[-1]}')

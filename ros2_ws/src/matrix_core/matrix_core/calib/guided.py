@@ -12,23 +12,25 @@ import numpy as np
 from matrix_core.calib.scene import CalibScene
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.geometry.camera import Camera, pose_matrix
-from matrix_core.geometry.homography import implied_camera
+from matrix_core.register.registration import STATUS_FAILED, Registration, RegistrationError
 
-REGISTRATION_SHAPE_ERROR = 0.05  # a registration homography further from a rigid camera is not used
+# Stricter than register's gate (which only rejects fits to the facades): a guide must predict the boards'
+# corners within a few pixels, so a registration further from a rigid camera is not used to guide.
+REGISTRATION_SHAPE_ERROR = 0.05
 
 
-def registered_camera(scene: CalibScene, img_H_ground) -> tuple:
-    """(Camera or None, how): the rigid camera a registration's ground homography implies.
+def registered_camera(scene: CalibScene, registration: Registration = None) -> tuple:
+    """(Camera or None, how): the rigid camera a :class:`Registration` of this image implies.
 
-    ``img_H_ground`` (3, 3) maps the ground (z = 0, world metres) to this image's pixels, or None (no
-    registration: how is ''). When it is unusable or not a rigid camera with the scene's intrinsics, the
-    camera is None and ``how`` says why (ending in '; ', it prefixes the note of the fallback)."""
-    if img_H_ground is None:
+    No registration, or one that register reported failed: (None, ''), the image motion guides silently (the
+    node logs the failure). A registration that is unusable (bad data) or not a rigid camera with the scene's
+    intrinsics: the camera is None and ``how`` says why (ending in '; ', it prefixes the note of the fallback)."""
+    if registration is None or registration.status == STATUS_FAILED:
         return None, ''
-    H = np.asarray(img_H_ground, dtype=np.float64)
-    if H.shape != (3, 3) or not np.all(np.isfinite(H)) or abs(np.linalg.det(H)) < 1e-12:
+    try:
+        implied = registration.implied_camera(scene.K)
+    except RegistrationError:
         return None, 'registration homography unusable; '
-    implied = implied_camera(scene.K, H)
     if implied.shape_error > REGISTRATION_SHAPE_ERROR:
         return None, f'registration not a rigid camera (shape error {implied.shape_error:.3f}); '
     return scene.camera(pose_matrix(implied.R, implied.t)), 'registration'
