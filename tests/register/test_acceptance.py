@@ -47,7 +47,7 @@ def test_default_backend_meets_the_acceptance_on_the_real_sample(matrix_sample):
         assert r.backend == 'sift' and r.reference_id == f'{view}/reference'
         assert r.confidence == pytest.approx(r.inliers / r.matches)
         assert r.inliers >= settings.min_inliers and np.isfinite(r.inlier_error_px)
-        # H_img_to_ground composes H_cur_to_ref with the reference's ground homography.
+        # ground_H_img composes ref_H_img with the reference's ground homography.
         ref = dataset.reference_camera(view)
         np.testing.assert_allclose(r.ground_H_img / r.ground_H_img[2, 2],
                                    (ref.ground_H_img() @ r.ref_H_img) / (ref.ground_H_img() @ r.ref_H_img)[2, 2],

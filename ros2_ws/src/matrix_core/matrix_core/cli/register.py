@@ -7,6 +7,11 @@ ground plane in metres, the frame of its calibration files), ``confidence``, ``m
 null when status is 'failed'. ``summary.json`` adds the error of each pair against the ground truth from
 the stored calibrations (mean over visible ground points, full-resolution pixels).
 
+No frame ends the run: a frame whose registration, check against the calibration or overlay raises (and
+every frame of a drone whose reference cannot be used) is reported with the step and reason in its
+summary row (``failure``), and ``stats`` counts them: ``failed`` (not registered), ``raised`` (a step
+raised) and ``unmeasured`` (registered, but the error against the calibration could not be computed).
+
 The reference of each drone is the folder's ``reference/`` image and calibration; without one, the
 first frame (with its stored calibration) is the reference. Obstacles and the flat-ground extent come from
 the folder's ``matrix_tracker_meta.json`` when it states them (simulated folders, see
@@ -30,6 +35,7 @@ from matrix_core.register.evaluate import homography_error_px
 from matrix_core.register.file_frame import registration_to_record
 from matrix_core.register.overlay import write_registration_overlay
 from matrix_core.register.registrar import Registrar
+from matrix_core.register.registration import STATUS_FAILED, Registration
 from matrix_core.register.scene import settings_for_dataset
 from matrix_core.register.settings import RegisterSettings
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
@@ -57,6 +63,50 @@ def _reference(dataset: MatrixDataset, view: str):
     return dataset.load_image(view, first), dataset.camera(view, first), f'{view}/frame:{first}'
 
 
+def _failure(stage: str, exc: Exception) -> str:
+    """One line saying which step of a frame raised and why."""
+    return f'{stage}: {type(exc).__name__}: {exc}'
+
+
+def _pair(view, frame, status, message, failure='', error=None, result=None) -> dict:
+    """One row of summary.json; ``failure`` names the step that raised ('' when none did)."""
+    return {'view': view, 'frame': frame, 'status': status, 'error_px': error,
+            'confidence': result.confidence if result else None, 'inliers': result.inliers if result else None,
+            'seconds': result.seconds if result else None, 'message': message, 'failure': failure}
+
+
+def _register_frame(args, dataset, settings, view, frame, index, registrar, image, ref_cam, out) -> dict:
+    """Register, write, measure and draw one frame; any step that raises makes the frame failed (its pair
+    says which step and why) instead of ending the run."""
+    name = f'Drone{conv.drone_number(view)}_{frame:04d}.json'
+    try:
+        current = dataset.load_image(view, frame)
+        result = registrar.register(current, frame)
+    except Exception as exc:  # a bad frame (unreadable image, registration bug) must not end the batch
+        reason = _failure('register', exc)
+        failed = Registration.failed(reason, reference_id=registrar.reference_id, backend=registrar.backend.name)
+        (out / name).write_text(json.dumps(registration_to_record(failed), indent=1))
+        return _pair(view, frame, STATUS_FAILED, reason, reason)
+    (out / name).write_text(json.dumps(registration_to_record(result), indent=1))
+    failure, error = '', None
+    if result.ok:
+        try:
+            error = homography_error_px(result.ref_H_img, dataset.camera(view, frame), ref_cam, dataset.area,
+                                        settings.exclude_boxes)
+        except Exception as exc:  # the registration stands; only its check against the calibration failed
+            failure = _failure('error vs calibration', exc)
+    if index == 0 or (args.png and index % args.png == 0):
+        title = (f'{view} frame {frame}: {result.status}, c {result.confidence:.2f}, {result.inliers} '
+                 f'inliers' + (f', {error:.2f} px vs calibration' if error is not None else
+                               f' ({result.message or failure})'))
+        try:
+            write_registration_overlay(out / 'overlay' / name.replace('.json', '.png'), current, image,
+                                       result.ref_H_img, ref_cam, dataset.area, title)
+        except Exception as exc:  # a picture is not worth the run
+            failure = '; '.join(filter(None, [failure, _failure('overlay', exc)]))
+    return _pair(view, frame, result.status, result.message, failure, error, result)
+
+
 def run(args) -> int:
     dataset = open_dataset(args.dataset)
     if not isinstance(dataset, MatrixDataset):
@@ -75,34 +125,33 @@ def run(args) -> int:
     summary = []
     with tqdm(total=len(views) * len(frames), desc='register', unit='image') as bar:
         for view in views:
-            image, ref_cam, ref_id = _reference(dataset, view)
-            registrar = Registrar(settings, image, ref_cam, dataset.area, ref_id, backend)
+            try:
+                image, ref_cam, ref_id = _reference(dataset, view)
+                registrar = Registrar(settings, image, ref_cam, dataset.area, ref_id, backend)
+            except Exception as exc:  # one drone without a usable reference: its frames fail, the others run
+                reason = _failure('reference', exc)
+                tqdm.write(f'{view}: {reason}')
+                summary += [_pair(view, frame, STATUS_FAILED, reason, reason) for frame in frames]
+                bar.update(len(frames))
+                continue
             for index, frame in enumerate(frames):
-                current = dataset.load_image(view, frame)
-                result = registrar.register(current, frame)
-                record = registration_to_record(result)
-                name = f'Drone{conv.drone_number(view)}_{frame:04d}.json'
-                (out / name).write_text(json.dumps(record, indent=1))
-                error = (homography_error_px(result.ref_H_img, dataset.camera(view, frame), ref_cam,
-                                             dataset.area, settings.exclude_boxes) if result.ok else None)
-                summary.append({'view': view, 'frame': frame, 'status': result.status, 'error_px': error,
-                                'confidence': result.confidence, 'inliers': result.inliers,
-                                'seconds': result.seconds, 'message': result.message})
-                if index == 0 or (args.png and index % args.png == 0):
-                    title = (f'{view} frame {frame}: {result.status}, c {result.confidence:.2f}, {result.inliers} '
-                             f'inliers' + (f', {error:.2f} px vs calibration' if error is not None else
-                                           f' ({result.message})'))
-                    write_registration_overlay(out / 'overlay' / name.replace('.json', '.png'), current, image,
-                                               result.ref_H_img, ref_cam, dataset.area, title)
+                pair = _register_frame(args, dataset, settings, view, frame, index, registrar, image, ref_cam, out)
+                if pair['failure']:
+                    tqdm.write(f'{view} frame {frame}: {pair["failure"]}')
+                summary.append(pair)
                 bar.update()
     errors = np.array([s['error_px'] for s in summary if s['error_px'] is not None])
+    seconds = [s['seconds'] for s in summary if s['seconds'] is not None]
     failed = sum(s['status'] != 'ok' for s in summary)
-    stats = {'pairs': len(summary), 'failed': failed, 'backend': backend.name,
+    stats = {'pairs': len(summary), 'failed': failed, 'raised': sum(bool(s['failure']) for s in summary),
+             'unmeasured': sum(s['status'] == 'ok' and s['error_px'] is None for s in summary),
+             'backend': backend.name,
              'error_px_median': float(np.median(errors)) if len(errors) else None,
              'error_px_max': float(np.max(errors)) if len(errors) else None,
-             'seconds_median': float(np.median([s['seconds'] for s in summary])) if summary else None}
+             'seconds_median': float(np.median(seconds)) if seconds else None}
     (out / 'summary.json').write_text(json.dumps({'stats': stats, 'pairs': summary}, indent=1))
     print(f'registered {len(summary) - failed}/{len(summary)} images with {backend.name}; error vs stored '
-          f'calibration: median {stats["error_px_median"]} px, max {stats["error_px_max"]} px; '
-          f'median {stats["seconds_median"]} s per image; wrote {out}')
+          f'calibration: median {stats["error_px_median"]} px, max {stats["error_px_max"]} px '
+          f'({stats["unmeasured"]} registered but not measured); {stats["raised"]} frame(s) raised (reason in '
+          f'summary.json "failure"); median {stats["seconds_median"]} s per image; wrote {out}')
     return 0

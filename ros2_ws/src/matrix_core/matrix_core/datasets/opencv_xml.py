@@ -8,10 +8,11 @@ import numpy as np
 from matrix_core.datasets.types import DatasetError
 
 
-def read_matrices(path: Path, names) -> dict:
+def read_matrices(path: Path, names, optional=()) -> dict:
     """Read the named matrices from an OpenCV FileStorage file (ASCII or base64 binary data).
 
     Nodes holding plain text numbers (Wildtrack's ``<rvec>1 2 3</rvec>``) are read as float vectors.
+    ``optional`` nodes are read when present and left out of the result when absent.
     Raises :class:`DatasetError` naming the file and node on any problem.
     """
     path = Path(path)
@@ -22,9 +23,11 @@ def read_matrices(path: Path, names) -> dict:
         if not fs.isOpened():
             raise DatasetError(f'cannot parse calibration file: {path}')
         out = {}
-        for name in names:
+        for name in list(names) + list(optional):
             node = fs.getNode(name)
             if node.empty():
+                if name in optional:
+                    continue
                 raise DatasetError(f'{path}: missing node <{name}>')
             if node.isSeq():
                 mat = np.array([node.at(i).real() for i in range(node.size())])

@@ -1,20 +1,37 @@
 """Readers of static-camera datasets of the same family: Wildtrack and MultiviewX.
 
 Both store one calibration per camera (no per-frame files), ``Image_subsets/C{n}/`` images and
-``annotations_positions/`` JSON like MATRIX, but with their own ground grids, units and file names.
-A subclass only states those differences (:class:`RigFormat`); the reading is shared.
+``annotations_positions/`` JSON like MATRIX, but with their own ground grids, units, handedness and file
+names. A subclass only states those differences (:class:`RigFormat`); the reading is shared.
+
+Published conventions (checked against each dataset's own files and loaders):
+
+- Wildtrack: ``positionID = col + 480 * row`` on a 480 x 1440 grid of 2.5 cm cells, file world
+  ``(x, y) = (-300 + 2.5 col, -900 + 2.5 row)`` centimetres, so a 12 m x 36 m area; calibration
+  ``calibrations/intrinsic_zero/intr_<cam>.xml`` (``camera_matrix``, zero distortion, for the undistorted
+  images) and ``calibrations/extrinsic/extr_<cam>.xml`` with ``<rvec>``/``<tvec>`` as plain text
+  numbers, ``tvec`` in centimetres; right-handed world, z up.
+- MultiviewX (synthetic, Unity): ``positionID = col + 1000 * row`` on a 1000 x 640 grid of 2.5 cm cells,
+  file world ``(x, y) = (col, row) / 40`` metres, a 25 m (x) x 16 m (y) area; ``calibrations/intrinsic``
+  and ``calibrations/extrinsic`` OpenCV matrices, metres. Its world is LEFT-handed (Unity), and its
+  ``rvec``/``tvec`` map it into a camera frame that looks down -z: every visible point has a negative
+  depth, which ``cv2.projectPoints`` hides (it divides by the depth, so pixels come out right). The
+  reader negates y (``world_internal = diag(1, -1, 1) world_file``, as for MATRIX) and turns the camera
+  frame to look down +z (``R = -R_file diag(1, -1, 1)``, ``t = -t_file``), which projects every point to
+  the same pixels with a positive depth. Internal area: x in [0, 25], y in [-16, 0].
 """
 
 import json
 from dataclasses import dataclass
 from functools import cached_property
 
+import cv2
 import numpy as np
 
 from matrix_core.datasets.base import MultiviewDataset, find_image, numbered_stems
 from matrix_core.datasets.opencv_xml import read_matrices
 from matrix_core.datasets.types import BoundingBox, DatasetError, PersonAnnotation
-from matrix_core.geometry.camera import Camera
+from matrix_core.geometry.camera import Camera, pose_matrix
 
 
 @dataclass(frozen=True)
@@ -30,6 +47,8 @@ class RigFormat:
         grid_origin_m: (x, y) world metres of cell (0, 0).
         grid_rows: number of grid rows (for the area).
         frame_digits, annotation_digits: zero padding of image and annotation file names.
+        left_handed: the files' world is left-handed and their camera frames look down -z (MultiviewX);
+            internally y is negated and the camera frames turned (see the module docstring).
     """
 
     camera_files: tuple
@@ -41,6 +60,11 @@ class RigFormat:
     grid_origin_m: tuple
     frame_digits: int
     annotation_digits: int
+    left_handed: bool = False
+
+
+# Negates the world y axis: file <-> internal world of a left-handed format (its own inverse).
+_MIRROR_Y = np.diag([1.0, -1.0, 1.0])
 
 
 class StaticRigDataset(MultiviewDataset):
@@ -74,11 +98,17 @@ class StaticRigDataset(MultiviewDataset):
         folder = self.root / 'annotations_positions'
         return tuple(numbered_stems(folder, ('.json',))) if folder.is_dir() else ()
 
+    def _file_xy(self, xy) -> np.ndarray:
+        """(2,) file-world metres <-> internal world metres (the same map both ways)."""
+        xy = np.asarray(xy, dtype=np.float64)
+        return xy * [1.0, -1.0] if self.FORMAT.left_handed else xy
+
     @property
     def area(self) -> tuple:
         f = self.FORMAT
         x0, y0 = f.grid_origin_m
-        return (x0, y0, x0 + f.grid_cols * f.grid_cell_m, y0 + f.grid_rows * f.grid_cell_m)
+        corners = self._file_xy([[x0, y0], [x0 + f.grid_cols * f.grid_cell_m, y0 + f.grid_rows * f.grid_cell_m]])
+        return tuple(float(v) + 0.0 for v in (*corners.min(axis=0), *corners.max(axis=0)))  # + 0.0: no -0.0
 
     def image_path(self, view, frame):
         return find_image(self.root / 'Image_subsets' / view, f'{frame:0{self.FORMAT.frame_digits}d}')
@@ -88,30 +118,42 @@ class StaticRigDataset(MultiviewDataset):
 
     @cached_property
     def _cameras(self) -> list:
+        return [self._read_camera(self.FORMAT.camera_files[int(view[1:]) - 1]) for view in self.views]
+
+    def _read_camera(self, stem: str) -> Camera:
+        """The internal camera of calibration ``stem`` (e.g. 'Camera1'), checked to face the area."""
         f = self.FORMAT
-        cams = []
-        for view in self.views:
-            stem = f.camera_files[int(view[1:]) - 1]
-            intr = read_matrices(self.root / 'calibrations' / f.intrinsic_dir / f'intr_{stem}.xml',
-                                 ['camera_matrix', 'distortion_coefficients'])
-            extr = read_matrices(self.root / 'calibrations/extrinsic' / f'extr_{stem}.xml', ['rvec', 'tvec'])
-            try:
-                cams.append(Camera.from_rvec_tvec(intr['camera_matrix'], extr['rvec'],
-                                                  extr['tvec'].reshape(3) * f.metres_per_unit,
-                                                  *self.image_size, intr['distortion_coefficients']))
-            except ValueError as exc:
-                raise DatasetError(f'{self.root}: bad calibration {stem}: {exc}') from exc
-        return cams
+        intr = read_matrices(self.root / 'calibrations' / f.intrinsic_dir / f'intr_{stem}.xml', ['camera_matrix'],
+                             optional=['distortion_coefficients'])
+        extr = read_matrices(self.root / 'calibrations/extrinsic' / f'extr_{stem}.xml', ['rvec', 'tvec'])
+        R, _ = cv2.Rodrigues(extr['rvec'].reshape(3, 1))
+        t = extr['tvec'].reshape(3) * f.metres_per_unit
+        if f.left_handed:
+            R, t = -R @ _MIRROR_Y, -t
+        try:
+            cam = Camera(intr['camera_matrix'], pose_matrix(R, t), *self.image_size,
+                         intr.get('distortion_coefficients', np.zeros(5)))
+        except ValueError as exc:
+            raise DatasetError(f'{self.root}: bad calibration {stem}: {exc}') from exc
+        x0, y0, x1, y1 = self.area
+        if cam.depth([(x0 + x1) / 2, (y0 + y1) / 2, 0.0])[0] <= 0:
+            # A calibration in the other handedness still gives the right pixels through cv2.projectPoints,
+            # but every point behind the camera here: say so instead of reading nonsense.
+            hand = 'left' if f.left_handed else 'right'
+            raise DatasetError(f'{self.root}: calibration {stem} puts the centre of the area {self.area} behind '
+                               f'the camera: not a {self.format_name} calibration ({hand}-handed world)')
+        return cam
 
     def position_to_world(self, position_id: int) -> np.ndarray:
         f = self.FORMAT
         col, row = position_id % f.grid_cols, position_id // f.grid_cols
-        return np.array([f.grid_origin_m[0] + col * f.grid_cell_m, f.grid_origin_m[1] + row * f.grid_cell_m])
+        return self._file_xy([f.grid_origin_m[0] + col * f.grid_cell_m, f.grid_origin_m[1] + row * f.grid_cell_m])
 
     def world_to_position(self, xy) -> int:
         f = self.FORMAT
-        col = int(np.floor((xy[0] - f.grid_origin_m[0]) / f.grid_cell_m + 1e-9))
-        row = int(np.floor((xy[1] - f.grid_origin_m[1]) / f.grid_cell_m + 1e-9))
+        x, y = self._file_xy(xy)
+        col = int(np.floor((x - f.grid_origin_m[0]) / f.grid_cell_m + 1e-9))
+        row = int(np.floor((y - f.grid_origin_m[1]) / f.grid_cell_m + 1e-9))
         if not (0 <= col < f.grid_cols and 0 <= row < f.grid_rows):
             raise ValueError(f'position {xy} is outside the {self.format_name} grid')
         return col + f.grid_cols * row
@@ -136,7 +178,7 @@ class StaticRigDataset(MultiviewDataset):
 
 
 class WildtrackDataset(StaticRigDataset):
-    """Wildtrack: 7 cameras, centimetre calibration, 480 x 1440 grid of 2.5 cm from (-3, -9) m."""
+    """Wildtrack: 7 cameras, centimetre calibration, 480 (x) x 1440 (y) grid of 2.5 cm from (-3, -9) m."""
 
     format_name = 'wildtrack'
     FORMAT = RigFormat(
@@ -146,10 +188,11 @@ class WildtrackDataset(StaticRigDataset):
 
 
 class MultiviewXDataset(StaticRigDataset):
-    """MultiviewX: 6 cameras, metre calibration, 640 x 1000 grid of 2.5 cm from (0, 0) m."""
+    """MultiviewX: 6 cameras, metre calibration, left-handed world, 1000 (x) x 640 (y) grid of 2.5 cm from
+    (0, 0) m: a 25 m x 16 m area."""
 
     format_name = 'multiviewx'
     FORMAT = RigFormat(
         camera_files=tuple(f'Camera{i}' for i in range(1, 7)), intrinsic_dir='intrinsic',
-        metres_per_unit=1.0, grid_cols=640, grid_rows=1000, grid_cell_m=0.025, grid_origin_m=(0.0, 0.0),
-        frame_digits=4, annotation_digits=5)
+        metres_per_unit=1.0, grid_cols=1000, grid_rows=640, grid_cell_m=0.025, grid_origin_m=(0.0, 0.0),
+        frame_digits=4, annotation_digits=5, left_handed=True)

@@ -14,7 +14,7 @@ from matrix_core.geometry.camera import Camera
 from matrix_core.geometry.homography import apply_homography
 from matrix_core.register.features import Features
 from matrix_core.register.gate import ground_polygon
-from matrix_core.register.ground_mask import ground_pixels, obstacle_mask, visible_ground_grid
+from matrix_core.register.ground_mask import ground_pixels, visible_ground_grid
 
 
 @dataclass(frozen=True)
@@ -40,7 +40,7 @@ class Reference:
         self.area = area
         self.ground_only = ground_only
         self.margin_m = margin_m
-        self._obstacles = obstacle_mask(camera, boxes)
+        self.boxes = boxes
         self.features = self._ground_features(features, features.xy)
         if not len(self.features):
             raise ValueError(f'{reference_id}: no reference feature lies on the ground (check the calibration)')
@@ -54,8 +54,7 @@ class Reference:
             return features
         inside = self.camera.in_image(np.nan_to_num(xy_in_ref, nan=-1e9))
         keep = np.zeros(len(features), dtype=bool)
-        keep[inside] = ground_pixels(self.camera, xy_in_ref[inside], self.area, self.margin_m,
-                                     obstacles=self._obstacles)
+        keep[inside] = ground_pixels(self.camera, xy_in_ref[inside], self.area, self.margin_m, self.boxes)
         return features.subset(keep)
 
     def make_key(self, key_id: str, features: Features, key_to_ref: np.ndarray) -> KeyFrame:

@@ -5,22 +5,14 @@ Convention: internal world metres; boxes are ((x0, y0, x1, y1), height) standing
 
 import numpy as np
 
+from matrix_core.geometry.occlusion import segments_blocked
+
 
 def rays_blocked(origin, targets, boxes) -> np.ndarray:
     """(N,) bool: whether the segment from ``origin`` (3,) to each of ``targets`` (N, 3) passes through any
-    box (slab test; touching a face counts as blocked only if the segment enters the interior)."""
-    targets = np.asarray(targets, dtype=float).reshape(-1, 3)
-    origin = np.asarray(origin, dtype=float)
-    d = targets - origin
-    d = np.where(np.abs(d) < 1e-12, 1e-12, d)  # axis-parallel rays: the slab test still works with huge t
-    blocked = np.zeros(len(targets), dtype=bool)
-    for (x0, y0, x1, y1), h in boxes:
-        ta = (np.array([x0, y0, 0.0]) - origin) / d
-        tb = (np.array([x1, y1, h]) - origin) / d
-        t_near = np.minimum(ta, tb).max(axis=1)
-        t_far = np.maximum(ta, tb).min(axis=1)
-        blocked |= (t_near < t_far) & (t_far > 1e-9) & (t_near < 1.0 - 1e-9)
-    return blocked
+    of the ``boxes`` (this module's ((x0, y0, x1, y1), height) form); see
+    :func:`~matrix_core.geometry.occlusion.segments_blocked`."""
+    return segments_blocked(origin, targets, [(*bounds, h) for bounds, h in boxes])
 
 
 def line_of_sight(camera, positions, boxes, sample_heights=(0.05, 0.9)) -> np.ndarray:
