@@ -1,23 +1,16 @@
 """``fuse``: fuses N drones' images in the bird's-eye view, detects and tracks people, publishes the result.
 
-Per view ``V`` in ``views`` it subscribes the image (``image_topic`` sensor_msgs/Image and/or
-``compressed_topic`` CompressedImage, see ``image_kind``) and the frame's ground homography: with
-``input_kind=homography`` ``homography_topic`` (matrix_msgs/HomographyStamped from ``register``; a failed or
-unusable registration, or a confidence below ``min_confidence``, makes the view missing), with
-``input_kind=camera_info`` ``camera_info_topic`` (CameraInfo, ``p = K [R | t]``, from ``calib`` or a bag's
-ground truth); patterns are relative names (``matrix_core.topics``). A view's images are subscribed once its
-geometry stream has a matched publisher (``matrix_ros.connect``). Messages are grouped by header stamp
-(``matrix_core.sync.FrameSynchronizer``); a frame is fused when every view arrived or ``sync_timeout``
-wall-clock seconds after its first message, with the views that did arrive (a stopped drone never stalls the
-graph). Views are built by ``matrix_core.fusion.view_inputs``, fused by ``matrix_core.fusion.fuser.BevFuser``.
-
-Publishes, every fused frame (header.stamp = the frame's stamp, frame_id ``world_frame``), built by
-``matrix_ros.fusion_messages``: ``tracks_topic`` (TrackArray: confirmed tracks matched in this frame),
-``detections_topic`` (TrackArray, id 0), ``markers_topic`` (MarkerArray for RViz), ``heatmap_topic``
-(OccupancyGrid 0-100, -1 when no view was usable) and ``/diagnostics`` (per view availability and reason;
-timings, latency = node clock - stamp, wait, resets, late messages). Bad input is logged and the view counts
-as missing. Service ``~/reset`` (std_srvs/Trigger) starts fresh; so does the node when stamps go back by more
-than ``tracker_reset_gap_s`` (a replay restarted). On SIGINT/SIGTERM it logs what it published and exits.
+Per view ``V`` in ``views``: the image (``image_topic`` Image and/or ``compressed_topic`` CompressedImage, see
+``image_kind``) and the frame's geometry, ``homography_topic`` (register's registration; a failed or unusable
+one, or a confidence below ``min_confidence``, makes the view missing) or ``camera_info_topic`` (CameraInfo
+``p = K [R | t]`` from calib or a bag's ground truth), per ``input_kind``; relative patterns
+(``matrix_core.topics``); images are subscribed once the geometry stream has a publisher (``matrix_ros.connect``).
+Messages are grouped by stamp (``matrix_core.sync``); a frame is fused when every view arrived or
+``sync_timeout`` wall seconds after its first message (a stopped drone never stalls the graph), by
+``matrix_core.fusion`` (``view_inputs``, ``fuser.BevFuser``). Every fused frame publishes (``matrix_ros.
+fusion_messages``) tracks, detections (id 0), RViz markers, the BEV heatmap and ``/diagnostics``. Bad input is
+logged and the view counts as missing. ``~/reset`` (std_srvs/Trigger) starts fresh, and so does the node when
+stamps go back by more than ``tracker_reset_gap_s`` (a replay restarted).
 """
 
 import time

@@ -1,21 +1,14 @@
-"""``calib``: per-drone camera calibration from the ground checkerboards, every frame.
+"""``calib``: per-drone camera calibration from the ground checkerboards, every frame (``matrix_core.calib``).
 
-Per drone ``V`` (``views`` lists several drones in one process; empty = one drone in the node's namespace),
-relative topics (``matrix_core.topics``):
-
-- subscribes ``V/image_raw`` (sensor_msgs/Image) or ``V/image/compressed`` (``compressed:=true``), QoS
-  ``qos``, and optionally ``V/<intrinsics_topic>`` (CameraInfo: only K, D and the size are used; default: the
-  intrinsics of the scene config); with ``use_registration`` also ``V/homography`` (the drone's registration
-  from ``register``): each image waits up to ``registration_wait_s`` for the registration of its stamp, whose
-  implied camera then predicts the boards; without one (or a failed one) the image is calibrated from the
-  image motion, logged;
-- publishes ``V/camera_info`` (CameraInfo with ``p = K [R | t]`` mapping WORLD points to pixels),
-  ``V/pose`` (PoseStamped: camera optical frame in ``world_frame``) and one status ``calib/V`` per image on
-  ``/diagnostics`` (ok/stale/failed, reprojection error, corners, pieces, age of the pose, latency, guide).
-
-Output stamps equal the input image stamp. Stale results (no acceptable pose in this image) republish the
-last good pose when ``publish_stale``; nothing is published before the first good pose. Bad input gives one
-error log line and an ERROR status, and the node keeps running. The core is ``matrix_core.calib``.
+Per drone ``V`` (``views``: several drones in one process; empty: one drone in the node's namespace), relative
+topics (``matrix_core.topics``): subscribes ``V/image_raw`` or ``V/image/compressed`` (``compressed``), optionally
+``V/<intrinsics_topic>`` (CameraInfo: only K, D and the size are used) and, with ``use_registration``,
+``V/homography``: each image waits up to ``registration_wait_s`` for the drone's registration of its stamp,
+whose implied camera then predicts the boards (without one, the image motion does; logged). Publishes
+``V/camera_info`` (``p = K [R | t]``, world -> pixels), ``V/pose`` (optical frame in ``world_frame``) and one
+``calib/V`` status per image on ``/diagnostics`` (ok/stale/failed, reprojection error, corners, age, latency,
+guide). Output stamp = image stamp; a stale frame republishes the last good pose (``publish_stale``); nothing
+is published before the first good pose; bad input is logged and reported, the node keeps running.
 """
 
 import time
@@ -29,11 +22,11 @@ from std_msgs.msg import Header
 
 from matrix_calib.settings import CalibNodeSettings
 from matrix_core import topics
+from matrix_core.calib.prior import initial_prior
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.drone_calibrator import FAILED, OK, DroneCalibrator
 from matrix_core.datasets import DatasetError, MatrixDataset
 from matrix_core.geometry.camera import check_intrinsics
-from matrix_core.register.registration import STATUS_FAILED
 from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
 from matrix_ros import diagnostics
 from matrix_ros.connect import SubscribeWhenConnected
@@ -86,17 +79,11 @@ class CalibNode(Node):
         self.connections[view] = SubscribeWhenConnected(self, view, [registrations], subscribe_images)
 
     def _prior(self, view, reference) -> tuple:
-        """(prior Camera or None, its image or None) of ``view``."""
-        if reference is not None:
-            try:
-                return reference.reference_camera(view), reference.reference_image(view)
-            except DatasetError as exc:
-                self.get_logger().warning(f'{view}: no reference prior in {reference.root}: {exc}')
-        if view in self.scene.initial_poses:
-            return self.scene.initial_poses[view], None
-        self.get_logger().error(f'{view}: no prior pose (set prior_dataset or initial_poses in the config); '
-                                'every frame will be reported failed')
-        return None, None
+        try:
+            return initial_prior(self.scene, view, reference)
+        except DatasetError as exc:
+            self.get_logger().error(f'{view}: {exc}; every frame will be reported failed')
+            return None, None
 
     def _on_intrinsics(self, view: str, msg: CameraInfo):
         cal, size, d = self.calibrators[view], (int(msg.width), int(msg.height)), (list(msg.d) + [0.0] * 5)[:5]
@@ -136,14 +123,12 @@ class CalibNode(Node):
             if 'image' not in frame.items:
                 self.get_logger().warning(f'{view}: registration of t={frame.stamp:.3f} s without its image')
                 continue
-            registration = frame.items.get('registration')
-            registration = None if registration is None else registration_from_msg(registration)
+            msg = frame.items.get('registration')
+            registration = None if msg is None else registration_from_msg(msg)
             if registration is None or not registration.ok:
-                why = (f'no registration within {self.settings.registration_wait_s} s' if registration is None else
-                       f'registration {registration.status}: {registration.message}')
-                log = self.get_logger().warning if registration is None or registration.status == STATUS_FAILED \
-                    else self.get_logger().error
-                log(f'{view}: t={frame.stamp:.3f} s: {why}; calibrated from the image motion')
+                self.get_logger().warning(f'{view}: t={frame.stamp:.3f} s: ' + (
+                    f'no registration within {self.settings.registration_wait_s} s' if registration is None else
+                    f'registration {registration.status}: {registration.message}') + '; calibrated from the image motion')
             self._calibrate(view, *frame.items['image'], registration)
 
     def _calibrate(self, view: str, msg, received: float, registration=None):

@@ -20,7 +20,6 @@ deterministic), 1 when nothing was played.
 """
 
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import rclpy
@@ -33,34 +32,8 @@ from matrix_core.bags.clock import read_sequence_clock
 from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
 from matrix_ros.message_types import message_class
 from matrix_ros.params import parse_node_args, declare_settings
+from matrix_ros.player_settings import BagPlayerSettings
 from matrix_ros.qos import publisher_qos, qos_by_name
-
-
-@dataclass
-class BagPlayerSettings:
-    bag: str = field(default='', metadata={'help': 'rosbag2 folder to play'})
-    rate: float = field(default=1.0, metadata={'help': 'speed factor of the recorded timing (without lockstep)'})
-    topics: list[str] = field(default_factory=list, metadata={'help': 'topics to play (empty = all)'})
-    lockstep: bool = field(default=False, metadata={'help': 'wait for lockstep_topic before each next frame'})
-    lockstep_topic: str = field(default='', metadata={'help': 'topic whose stamped messages release the next frame'})
-    lockstep_type: str = field(default='', metadata={'help': 'message type of lockstep_topic, e.g. matrix_msgs/msg/TrackArray'})
-    lockstep_count: int = field(default=1, metadata={'help': 'messages per frame to wait for on lockstep_topic'})
-    lockstep_timeout: float = field(default=30.0, metadata={'help': 'seconds to wait before going on anyway'})
-    lockstep_qos: str = field(default='history', metadata={
-        'help': 'QoS of the lockstep subscription: history (also messages published before matching; needs a '
-                'transient-local publisher, as all of this workspace\'s are) or reliable (any publisher)'})
-    wait_for_subscribers: int = field(default=0, metadata={
-        'help': 'before the first frame, wait until every image topic has this many subscribers'})
-    qos: str = field(default='reliable', metadata={'help': 'QoS of the published topics: reliable or sensor_data'})
-    exit_when_done: bool = field(default=True, metadata={'help': 'exit after the last frame'})
-
-    def __post_init__(self):
-        if self.rate <= 0 or self.lockstep_timeout <= 0 or self.lockstep_count < 1:
-            raise ValueError('rate and lockstep_timeout must be positive, lockstep_count >= 1')
-        if self.lockstep and not (self.lockstep_topic and self.lockstep_type):
-            raise ValueError('lockstep needs lockstep_topic and lockstep_type')
-        qos_by_name(self.qos)
-        qos_by_name(self.lockstep_qos)
 
 
 class BagPlayer(Node):

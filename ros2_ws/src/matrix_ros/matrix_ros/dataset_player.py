@@ -12,6 +12,7 @@ from rclpy.node import Node
 from std_msgs.msg import Header
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
+from matrix_core import topics
 from matrix_core.bags.clock import DEFAULT_CLOCK
 from matrix_core.datasets import DatasetError, open_dataset
 from matrix_ros.conversions import camera_to_camera_info, image_to_msg, seconds_to_stamp
@@ -56,11 +57,9 @@ class DatasetPlayer(Node):
         qos = publisher_qos(s.qos)
         self.image_pubs, self.info_pubs = {}, {}
         for view in self.views:
-            if s.compressed:
-                self.image_pubs[view] = self.create_publisher(CompressedImage, f'/{view}/image/compressed', qos)
-            else:
-                self.image_pubs[view] = self.create_publisher(Image, f'/{view}/image_raw', qos)
-            self.info_pubs[view] = self.create_publisher(CameraInfo, f'/{view}/ground_truth/camera_info', publisher_qos())
+            self.image_pubs[view] = self.create_publisher(CompressedImage if s.compressed else Image,
+                                                          topics.image_topic(view, s.compressed), qos)
+            self.info_pubs[view] = self.create_publisher(CameraInfo, topics.camera_info_topic(view), publisher_qos())
         self.index = 0
         self.timer = self.create_timer(s.frame_period / s.rate, self._tick)
         self.get_logger().info(f'publishing {len(self.frames)} frames x {len(self.views)} views '
@@ -82,7 +81,7 @@ class DatasetPlayer(Node):
         frame = self.frames[self.index]
         stamp = seconds_to_stamp(self.settings.start_time + self.index * self.settings.frame_period)
         for view in self.views:
-            header = Header(stamp=stamp, frame_id=f'{view}/camera_optical')
+            header = Header(stamp=stamp, frame_id=topics.optical_frame(view))
             try:
                 self.image_pubs[view].publish(self._image_msg(view, frame, header))
                 self.info_pubs[view].publish(camera_to_camera_info(self.dataset.camera(view, frame), header))

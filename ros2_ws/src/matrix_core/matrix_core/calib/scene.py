@@ -26,7 +26,7 @@ import numpy as np
 import yaml
 
 from matrix_core.calib.board import Checkerboard
-from matrix_core.geometry.camera import Camera
+from matrix_core.geometry.camera import Camera, check_intrinsics
 
 CONFIG_PACKAGE = 'matrix_calib'
 DEFAULT_CONFIG_NAME = 'matrix_sample.yaml'
@@ -83,13 +83,13 @@ def scene_from_dict(data: dict, where: str = 'calibration config') -> CalibScene
     _check_keys(f'{where} intrinsics', intr, {'K', 'dist'})
     if 'K' not in intr or 'image_size' not in data:
         raise ValueError(f'{where}: intrinsics.K and image_size are required')
-    K = np.asarray(intr['K'], dtype=np.float64).reshape(3, 3)
     dist = np.zeros(5)
     d = np.asarray(intr.get('dist', []), dtype=np.float64).reshape(-1)
     dist[:min(5, len(d))] = d[:5]
     size = tuple(int(v) for v in data['image_size'])
-    if not np.all(np.isfinite(K)) or abs(np.linalg.det(K)) < 1e-9 or len(size) != 2 or min(size) <= 0:
-        raise ValueError(f'{where}: invalid intrinsics K {K.tolist()} or image_size {size}')
+    if len(size) != 2:
+        raise ValueError(f'{where}: image_size must be [width, height], got {list(size)}')
+    K = check_intrinsics(intr['K'], dist, size, f'{where} intrinsics')
     scene = CalibScene(boards, K, dist, size)
     for view, pose in (data.get('initial_poses') or {}).items():
         _check_keys(f'{where} initial_poses.{view}', pose, {'rvec', 'tvec'})

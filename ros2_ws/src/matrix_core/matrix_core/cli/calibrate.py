@@ -18,6 +18,7 @@ from tqdm import tqdm
 from matrix_core.calib.drone_calibrator import OK, DroneCalibrator
 from matrix_core.calib.evaluation import pose_errors, summarize_errors
 from matrix_core.calib.scene import load_scene
+from matrix_core.calib.prior import initial_prior
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.cli.main import main as cli_main
 from matrix_core.datasets import DatasetError, MatrixDataset, MatrixWriter, open_dataset
@@ -41,19 +42,6 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def initial_prior(dataset: MatrixDataset, scene, view: str):
-    """(prior camera, prior image or None): the reference calibration if present, else the config's."""
-    if dataset.has_reference:
-        try:
-            return dataset.reference_camera(view), dataset.reference_image(view)
-        except DatasetError:
-            pass
-    if view in scene.initial_poses:
-        return scene.initial_poses[view], None
-    raise DatasetError(f'no prior pose for {view}: {dataset.root} has no reference/calibrations and the '
-                       f'config has no initial_poses.{view}')
-
-
 def calibrate_dataset(dataset: MatrixDataset, out: Path, settings: CalibSettings, views=(), max_frames=0,
                       frame_period=0.5, compare=False) -> list:
     """Run the calibration over ``dataset``; returns the status rows (also written to the CSV)."""
@@ -67,7 +55,7 @@ def calibrate_dataset(dataset: MatrixDataset, out: Path, settings: CalibSettings
     rows = []
     with tqdm(total=len(views) * len(frames), desc='calibrate', unit='image') as bar:
         for view in views:
-            prior, prior_image = initial_prior(dataset, scene, view)
+            prior, prior_image = initial_prior(scene, view, dataset)
             calibrator = DroneCalibrator(scene, settings, prior, prior_image)
             for index, frame in enumerate(frames):
                 result = calibrator.process(dataset.load_image(view, frame), index * frame_period)
