@@ -74,7 +74,7 @@ def wait_matched(node, endpoints: Iterable, processes: Iterable[subprocess.Popen
                  count: int = 1, executor=None) -> None:
     """Spin until every publisher has at least ``count`` matched subscriptions and every subscription at least
     ``count`` matched publishers (``count=0``: none, the other side is gone); fails naming those still waiting."""
-    endpoints = list(endpoints)
+    endpoints, processes = list(endpoints), list(processes)
 
     def matched(e) -> int:
         return e.get_subscription_count() if hasattr(e, 'get_subscription_count') else e.get_publisher_count()
@@ -85,8 +85,8 @@ def wait_matched(node, endpoints: Iterable, processes: Iterable[subprocess.Popen
     if not spin_until(node, lambda: all(map(ok, endpoints)), processes, timeout_s, executor):
         waiting = [f'{e.topic_name} ({matched(e)})' for e in endpoints if not ok(e)]
         exited = [p.args[0] for p in processes if p.poll() is not None]
-        raise AssertionError(f'after {timeout_s:.0f} s not matched ({count} each): {", ".join(waiting)}'
-                             + (f'; exited: {exited}' if exited else ''))
+        raise AssertionError(f'not matched ({count} each): {", ".join(waiting)}; '
+                             + (f'exited: {exited}' if exited else f'waited {timeout_s:g} s'))
 
 
 def wait_for(condition: Callable[[], bool], timeout_s: float, what: str) -> None:
@@ -94,5 +94,5 @@ def wait_for(condition: Callable[[], bool], timeout_s: float, what: str) -> None
     deadline = time.monotonic() + timeout_s
     while not condition():
         if time.monotonic() > deadline:
-            raise AssertionError(f'after {timeout_s:.0f} s still waiting for {what}')
+            raise AssertionError(f'after {timeout_s:g} s still waiting for {what}')
         time.sleep(0.05)

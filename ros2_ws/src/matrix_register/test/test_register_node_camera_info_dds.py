@@ -40,7 +40,7 @@ def test_reference_from_camera_info_over_dds(matrix_sample, node_executable):
                                                 lambda m: got.__setitem__(stamp_to_seconds(m.header.stamp), m), 10)
         image_pub = node.create_publisher(Image, f'/{VIEW}/image_raw', 10)
         info_pub = node.create_publisher(CameraInfo, f'/{VIEW}/camera_info', 10)
-        wait_matched(node, [image_pub, info_pub, homographies], [register], 60.0)
+        wait_matched(node, [image_pub, info_pub, homographies], [register], 120.0)
 
         def header(seconds):
             return Header(stamp=seconds_to_stamp(seconds), frame_id=f'{VIEW}/camera_optical')

@@ -45,7 +45,7 @@ def test_register_node_over_dds(matrix_sample, node_executable):
                                                  lambda m, v=v: got[v].append(m), 10) for v in VIEWS]
         node.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 10)
         # Start the images only once the register node is up and this listener is connected to it.
-        wait_matched(node, homographies, [register], 60.0)
+        wait_matched(node, homographies, [register], 120.0)
         player = start_node(node_executable('matrix_ros', 'dataset_player'), f'dataset:={matrix_sample}',
                             f'views:={views}', f'max_frames:={FRAMES}', 'rate:=2.0', 'wait_for_subscribers:=1')
         spin_until(node, lambda: all(len(m) >= FRAMES for m in got.values()), [register, player], 120.0)

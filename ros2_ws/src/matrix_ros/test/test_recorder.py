@@ -63,8 +63,8 @@ def _exercise(start_recorder, procs, ds):
         publish(0)
         publish(1)   # before the recorder exists
         procs.append(rec := start_recorder())
-        wait_matched(node, [info_pub], [rec], 30)
-        wait_matched(node, [track_pub], [rec], 30, count=2)   # the bag's subscription and the MOT text's
+        wait_matched(node, [info_pub], [rec], 60)
+        wait_matched(node, [track_pub], [rec], 60, count=2)   # the bag's subscription and the MOT text's
         publish(2)   # no wait for the recorder's side of the matching: history covers it
         for pub in (info_pub, track_pub):
             pub.wait_for_all_acked(rclpy.duration.Duration(seconds=5))
