@@ -81,20 +81,15 @@ def test_live_graph_equals_offline(node_executable, tmp_path):
 def _wait_for_endpoints(topic: str, publishers: int, subscribers: int, timeout: float = 60.0) -> None:
     """Until this process's DDS graph shows the endpoints of two other processes. Their own matching cannot be
     seen from here; the recorder asks for the publishers' history, so a late match loses nothing."""
-    import time
-
     import rclpy
     from rclpy.context import Context
 
     context = Context()
     rclpy.init(context=context)
     node = rclpy.create_node('fuse_graph_test_probe', context=context)
-    try:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not (node.count_publishers(topic) >= publishers
-                                                     and node.count_subscribers(topic) >= subscribers):
-            time.sleep(0.1)
-        assert node.count_publishers(topic) >= publishers and node.count_subscribers(topic) >= subscribers, topic
+    try:   # the graph cache fills without spinning
+        wait_for(lambda: node.count_publishers(topic) >= publishers and node.count_subscribers(topic) >= subscribers,
+                 timeout, f'{publishers} publishers and {subscribers} subscribers on {topic}')
     finally:
         node.destroy_node()
         rclpy.shutdown(context=context)
