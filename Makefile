@@ -5,11 +5,12 @@ IN_ENV := source scripts/env.sh &&
 # Where the experiments write their report (its PNGs go to images/results/ beside it); CI writes elsewhere.
 RESULTS ?= docs/RESULTS.md
 
-.PHONY: help setup build test demo bench clean experiments experiments-quick
+.PHONY: help setup build test test-fast demo bench clean experiments experiments-quick
 
 help:
 	@echo "make setup  - create .venv (pinned), colcon build ros2_ws, install offline weights (idempotent)"
 	@echo "make test   - run every test (unit, integration, ROS 2 over DDS, system)"
+	@echo "make test-fast - every test but the DDS (ros), system and slow ones (under 3 minutes)"
 	@echo "make demo   - replay the real MATRIX sample through ROS 2 and write pictures to out/demo"
 	@echo "make bench  - print the speed figures of every component (scripts/bench_*.py)"
 	@echo "make build  - colcon build only"
@@ -24,6 +25,10 @@ build:
 
 test: setup
 	$(IN_ENV) python -m pytest
+
+# No setup: for the edit-test loop of a machine already set up (system tests are all marked ros and slow).
+test-fast:
+	$(IN_ENV) python -m pytest -m "not ros and not slow"
 
 demo: setup
 	$(IN_ENV) bash scripts/demo.sh

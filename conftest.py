@@ -2,12 +2,16 @@
 
 import os
 import random
+import sys
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parent
 SHARED = Path(os.environ.get('MATRIX_SHARED', ROOT.parent / 'shared'))
+# Test-only helper modules (e.g. ros_helpers), importable from tests/ and ros2_ws/src/*/test/ alike: with
+# --import-mode=importlib the test folders are no packages and nothing else puts them on the path.
+sys.path.insert(0, str(ROOT / 'tests' / 'helpers'))
 
 # Every test run gets its own DDS domain on the loopback only, so parallel runs never see each other.
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'

@@ -32,6 +32,7 @@ def _drone(dataset, view, settings=None):
             Registrar(register_settings, reference, camera, dataset.area, f'{view}/reference'))
 
 
+@pytest.mark.slow   # 40 real 1080p views: 8 s
 def test_every_real_frame_is_calibrated_from_its_registration(dataset):
     """All 8 drones x 5 frames: ok, no board search, no image-motion features, within 0.1 deg / 6 cm of the
     stored calibration (searching gets 32 of 40 frames, worst 0.17 deg / 5.6 cm)."""

@@ -5,9 +5,6 @@ executed against a minimal stand-in of the `launch` / `launch_ros` API it uses (
 given) and must produce exactly the processes of `graph_nodes`, which `run_graph` starts for real
 (tests/system/test_run_graph.py)."""
 
-import importlib.util
-import sys
-import types
 from pathlib import Path
 
 import pytest
@@ -15,6 +12,7 @@ import yaml
 
 from matrix_bringup.graph import BagFacts, GraphSettings, NodeSpec, graph_nodes
 from matrix_core.settings import settings_fields
+from launch_stand_in import declared_arguments, launch, launch_parameter_ok, load_launch_file
 
 LAUNCH = Path(__file__).resolve().parents[2] / 'ros2_ws/src/matrix_bringup/launch/full_graph.launch.py'
 FACTS = BagFacts(compressed=True, frames=5, has_ground_truth=True)
@@ -79,8 +77,8 @@ def test_monitor_paces_lockstep_on_every_stage(settings):
 
 def test_every_process_is_built_and_its_parameter_files_apply(node_executable, settings):
     """Parameter files use the `/**` key (they must reach /Dn/register and register_2) and name real parameters."""
-    from matrix_bev_tracker.fuse_node import FuseNodeSettings
-    from matrix_register.register_node import RegisterNodeSettings
+    from matrix_bev_tracker.settings import FuseNodeSettings
+    from matrix_register.settings import RegisterNodeSettings
 
     fields = {'register': RegisterNodeSettings, 'fuse': FuseNodeSettings}
     for node in graph_nodes(settings(record='/out/rec', monitor=True), FACTS):
@@ -100,84 +98,21 @@ def test_ros_args_command_line():
     assert spec.label == 'D3/calib'
 
 
-# --- the launch file, against a stand-in of the launch API -----------------------------------------------
-class _Recorded:
-    def __init__(self, *args, **kwargs):
-        self.args, self.kwargs = args, kwargs
-
-
-class _LaunchConfiguration(_Recorded):
-    def perform(self, context):
-        return context.launch_configurations[self.args[0]]
-
-
-class _OpaqueFunction(_Recorded):
-    def execute(self, context):
-        return self.kwargs['function'](context)
-
-
-class _Node(_Recorded):
-    """launch_ros.actions.Node: keyword arguments only; parameters a list of file paths and dicts whose values
-    launch_ros can normalise (launch_ros.utilities.normalize_parameters: str, bool, int, float, or a list of
-    them, all str, all bool or all numbers; None is a TypeError there)."""
-
-    KEYWORDS = {'executable', 'package', 'name', 'namespace', 'exec_name', 'parameters', 'remappings',
-                'ros_arguments', 'arguments', 'output'}
-
-    def __init__(self, *args, **kwargs):
-        assert not args and set(kwargs) <= self.KEYWORDS, (args, set(kwargs) - self.KEYWORDS)
-        for entry in kwargs.get('parameters') or []:
-            if isinstance(entry, dict):
-                for key, value in entry.items():
-                    assert _launch_parameter_ok(value), (kwargs['executable'], key, value)
-            else:
-                assert isinstance(entry, str) and Path(entry).is_file(), entry
-        super().__init__(**kwargs)
-
-
-def _launch_parameter_ok(value) -> bool:
-    if isinstance(value, (str, bool, int, float)):
-        return True
-    if not isinstance(value, (list, tuple)) or not value:
-        return False
-    kinds = {bool if isinstance(v, bool) else (float if isinstance(v, (int, float)) else type(v)) for v in value}
-    return len(kinds) == 1 and kinds <= {str, bool, float}
-
-
-def _load_launch_file(monkeypatch):
-    modules = {name: types.ModuleType(name) for name in
-               ('launch', 'launch.actions', 'launch.substitutions', 'launch_ros', 'launch_ros.actions')}
-    modules['launch'].LaunchDescription = _Recorded
-    for name in ('DeclareLaunchArgument', 'SetEnvironmentVariable'):
-        setattr(modules['launch.actions'], name, type(name, (_Recorded,), {}))
-    modules['launch.actions'].OpaqueFunction = _OpaqueFunction
-    modules['launch.substitutions'].LaunchConfiguration = _LaunchConfiguration
-    modules['launch_ros.actions'].Node = _Node
-    for name, module in modules.items():
-        monkeypatch.setitem(sys.modules, name, module)
-    spec = importlib.util.spec_from_file_location('full_graph_launch', LAUNCH)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
+# --- the launch file, against a stand-in of the launch API (tests/helpers/launch_stand_in.py) ----------
 def test_launch_file_starts_the_graph_nodes(monkeypatch, tmp_path):
     from matrix_core.cli.main import main as cli
 
     sim = tmp_path / 'sim'
     assert cli(['simulate', '--config', 'simple', '--frames', '2', '--fast', '--bag', '--out', str(sim)]) == 0
-    assert _launch_parameter_ok([1, 2.5]) and not any(map(_launch_parameter_ok, ([], None, ['a', 1], {'a': 1})))
-    description = _load_launch_file(monkeypatch).generate_launch_description()
-    declared = {a.args[0]: a.kwargs for a in description.args[0] if type(a).__name__ == 'DeclareLaunchArgument'}
+    assert launch_parameter_ok([1, 2.5]) and not any(map(launch_parameter_ok, ([], None, ['a', 1], {'a': 1})))
+    description = load_launch_file(monkeypatch, LAUNCH).generate_launch_description()
+    declared = declared_arguments(description)
     fields = {name: (default, help_text) for name, _, default, help_text in settings_fields(GraphSettings)}
     assert set(declared) == set(fields)
     assert all(kw['description'] == fields[name][1] and kw['description'] for name, kw in declared.items())
 
-    launch_args = {name: kw['default_value'] for name, kw in declared.items()}
-    launch_args.update(bag=str(sim / 'bag'), dataset=str(sim), views='D2,D4', record=str(tmp_path / 'rec'),
-                       dds_profile='/etc/fastdds.xml')
-    opaque = next(a for a in description.args[0] if isinstance(a, _OpaqueFunction))
-    actions = opaque.execute(types.SimpleNamespace(launch_configurations=launch_args))
+    actions = launch(description, bag=str(sim / 'bag'), dataset=str(sim), views='D2,D4',
+                     record=str(tmp_path / 'rec'), dds_profile='/etc/fastdds.xml')
     assert type(actions[0]).__name__ == 'SetEnvironmentVariable'
     assert actions[0].args == ('FASTRTPS_DEFAULT_PROFILES_FILE', '/etc/fastdds.xml')
     launched = [a.kwargs for a in actions[1:]]
@@ -188,20 +123,3 @@ def test_launch_file_starts_the_graph_nodes(monkeypatch, tmp_path):
     assert [k['parameters'] for k in launched] == [[*n.param_files, n.parameters] for n in expected]
     calib = launched[0]['parameters'][-1]
     assert calib['config'].endswith('sim_simple.yaml') and calib['compressed'] is False   # from the dataset and bag
-
-
-@pytest.mark.parametrize('package, name', [('matrix_bev_tracker', 'fuse.yaml')])
-def test_fuse_config_matches_the_node_parameters(install_dir, package, name):
-    """Every parameter in config/fuse.yaml is a FuseNodeSettings field with the same default, and every
-    parameter of the node itself (not the tracker's, which grow elsewhere) is in the file."""
-    from matrix_core.settings import settings_fields
-    from matrix_bev_tracker.fuse_node import FuseNodeSettings
-
-    params = yaml.safe_load((install_dir / package / 'share' / package / 'config' / name).read_text())
-    params = params['/**']['ros__parameters']
-    defaults = {n: d for n, _, d, _ in settings_fields(FuseNodeSettings)}
-    from matrix_core.tracking.settings import TrackerSettings
-    own = set(defaults) - set(TrackerSettings.__dataclass_fields__)
-    assert set(params) <= set(defaults) and own <= set(params), (set(params) - set(defaults), own - set(params))
-    for key, value in params.items():
-        assert value == defaults[key] or (isinstance(value, list) and list(value) == list(defaults[key])), key

@@ -3,9 +3,6 @@ a corrupt image and a NaN homography are logged and only that view is dropped, a
 frame go out after the sync timeout with 7 views while tracking continues, and a restarted node resumes;
 a view's images are subscribed only once its homography stream is connected (no homography lost at start)."""
 
-import subprocess
-import time
-
 import numpy as np
 import pytest
 import rclpy
@@ -20,6 +17,7 @@ from matrix_core.cli.main import main as cli
 from matrix_core.datasets import open_dataset
 from matrix_ros.conversions import image_to_compressed, image_to_msg, seconds_to_stamp, stamp_to_seconds
 from matrix_ros.qos import qos_by_name
+from ros_helpers import spin_for, spin_until, start_node, stop
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
@@ -41,8 +39,8 @@ class Drones:
         self.raw = {v: self.node.create_publisher(Image, f'/{v}/image_raw', qos) for v in self.views}
         self.homs = {v: self.node.create_publisher(HomographyStamped, f'/{v}/homography', 10) for v in self.views}
         self.tracks, self.diags = {}, {}
-        self.node.create_subscription(TrackArray, '/tracks', self._on_tracks, 50)
-        self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 50)
+        self.outputs = [self.node.create_subscription(TrackArray, '/tracks', self._on_tracks, 50),
+                        self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 50)]
 
     def _on_tracks(self, msg):
         self.tracks[round(stamp_to_seconds(msg.header.stamp), 3)] = msg
@@ -53,17 +51,15 @@ class Drones:
             self.diags[round(stamp_to_seconds(msg.header.stamp), 3)] = by_name
 
     def spin_until(self, condition, timeout):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not condition():
-            self.executor.spin_once(timeout_sec=0.05)
-        return condition()
+        return spin_until(self.node, condition, timeout_s=timeout, executor=self.executor)
 
     def wait_for_fuse(self, timeout=60.0, count=1):
-        """Until every image and homography topic has ``count`` subscribers (0: the old node is gone)."""
+        """Until every image and homography topic has ``count`` subscribers and the /tracks and /diagnostics
+        subscriptions ``count`` publishers (0: the old node is gone). Both sides of the homography match are
+        then complete: fuse subscribes a view's images only once its homography subscription has matched."""
         pubs = [*self.images.values(), *self.raw.values(), *self.homs.values()]
-        matched = self.spin_until(lambda: all(p.get_subscription_count() == count for p in pubs), timeout)
-        self.spin_until(lambda: False, 1.0)   # the subscriber's side of the match completes a moment later
-        return matched
+        return self.spin_until(lambda: all(p.get_subscription_count() == count for p in pubs)
+                               and all(s.get_publisher_count() == count for s in self.outputs), timeout)
 
     def publish(self, k: int, skip=(), corrupt_image=(), bad_encoding=(), nan_homography=()):
         """Frame k (stamp 1 + 0.5 k); returns the stamp once its TrackArray arrived (30 s at most)."""
@@ -98,18 +94,7 @@ class Drones:
 
 def _fuse(node_executable, *params):
     args = ['sync_timeout:=2.0', 'image_kind:=both', 'tracker_reset_gap_s:=2.0', *params]
-    return subprocess.Popen([str(node_executable('matrix_bev_tracker', 'fuse')), '--ros-args',
-                             *[a for p in args for a in ('-p', p)]],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-
-
-def _stop(proc) -> str:
-    proc.terminate()
-    try:
-        return proc.communicate(timeout=20)[0]
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        return proc.communicate()[0]
+    return start_node(node_executable('matrix_bev_tracker', 'fuse'), *args)
 
 
 def test_faults_and_restart(node_executable, tmp_path):
@@ -123,7 +108,7 @@ def test_faults_and_restart(node_executable, tmp_path):
         bad = drones.publish(2, corrupt_image=['D3'], bad_encoding=['D5'], nan_homography=['D4'])
         stopped = [drones.publish(k, skip=['D8']) for k in (3, 4)]
         assert fuse.poll() is None, 'fuse node died'
-        log = _stop(fuse)
+        log = stop(fuse)
         assert fuse.returncode == 0 and 'published 5 frames' in log, log
         assert drones.wait_for_fuse(count=0), 'the stopped fuse node is still subscribed'
         fuse = _fuse(node_executable)   # restart mid-run: it resumes with the next frames
@@ -131,10 +116,10 @@ def test_faults_and_restart(node_executable, tmp_path):
         resumed = [drones.publish(k) for k in (5, 6)]
         n_resumed = len(drones.tracks[resumed[1]].tracks)
         replayed = drones.publish(0)    # the replay starts over: time goes back 2.5 s
-        log2 = _stop(fuse)
+        log2 = stop(fuse)
     finally:
         if fuse.poll() is None:
-            _stop(fuse)
+            stop(fuse)
         drones.close()
 
     def used(stamp):
@@ -171,27 +156,24 @@ def test_images_wait_for_the_homography_stream(node_executable):
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
 
-    def spin_until(condition, timeout):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not condition():
-            executor.spin_once(timeout_sec=0.05)
-        return condition()
+    def wait(condition, timeout):
+        return spin_until(node, condition, [fuse], timeout, executor)
 
     images = {v: node.create_publisher(CompressedImage, f'/{v}/image/compressed', qos_by_name('reliable'))
               for v in ('D1', 'D2')}
     fuse = _fuse(node_executable, 'views:=[D1,D2]', 'image_kind:=compressed')
     try:
-        assert spin_until(lambda: node.count_subscribers('/D1/homography') == 1, 60.0), 'fuse did not start'
-        spin_until(lambda: False, 3.0)
+        assert wait(lambda: node.count_subscribers('/D1/homography') == 1, 60.0), 'fuse did not start'
+        spin_for(node, 3.0, executor)   # what is tested: no image subscription for 3 s without a homography
         assert [p.get_subscription_count() for p in images.values()] == [0, 0]
         homography = node.create_publisher(HomographyStamped, '/D1/homography', 10)
-        assert spin_until(lambda: images['D1'].get_subscription_count() == 1, 30.0)
-        spin_until(lambda: False, 1.0)
+        assert wait(lambda: images['D1'].get_subscription_count() == 1, 30.0)
+        spin_for(node, 1.0, executor)   # what is tested: D2, still without a homography, stays unsubscribed
         assert images['D2'].get_subscription_count() == 0 and homography.get_subscription_count() == 1
-        log = _stop(fuse)
+        log = stop(fuse)
     finally:
         if fuse.poll() is None:
-            _stop(fuse)
+            stop(fuse)
         node.destroy_node()
         rclpy.shutdown(context=context)
     assert 'D2: waiting for a publisher on /D2/homography before subscribing its images' in log, log

@@ -4,8 +4,6 @@ truth, must match the offline `matrix-tracker evaluate` of the same checkpoint o
 
 import json
 import os
-import subprocess
-import time
 from pathlib import Path
 
 import pytest
@@ -13,6 +11,7 @@ import pytest
 from matrix_core.bags import bag_topics
 from matrix_core.cli.main import main as cli
 from matrix_core.evaluation.recording import read_recording_bag
+from ros_helpers import start_node, stop, wait_for
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 FRAMES = 12
@@ -21,26 +20,8 @@ DDS_PROFILE = Path(__file__).resolve().parents[2] / 'ros2_ws/src/matrix_bringup/
 
 
 def _start(node_executable, pkg, exe, *params):
-    args = [str(node_executable(pkg, exe)), '--ros-args']
-    for p in params:
-        args += ['-p', p]
-    env = {'FASTRTPS_DEFAULT_PROFILES_FILE': str(DDS_PROFILE), **os.environ}
-    return subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
-
-
-def _stop(procs) -> list:
-    """SIGTERM, then SIGKILL after 20 s; returns each process's output."""
-    for p in procs:
-        if p.poll() is None:
-            p.terminate()
-    logs = []
-    for p in procs:
-        try:
-            logs.append(p.communicate(timeout=20)[0])
-        except subprocess.TimeoutExpired:
-            p.kill()
-            logs.append(p.communicate()[0])
-    return logs
+    profile = os.environ.get('FASTRTPS_DEFAULT_PROFILES_FILE', str(DDS_PROFILE))   # the environment's wins
+    return start_node(node_executable(pkg, exe), *params, env={'FASTRTPS_DEFAULT_PROFILES_FILE': profile})
 
 
 def test_live_graph_equals_offline(node_executable, tmp_path):
@@ -67,13 +48,16 @@ def test_live_graph_equals_offline(node_executable, tmp_path):
     player = _start(node_executable, 'matrix_ros', 'bag_player', f'bag:={sim / "bag"}', 'wait_for_subscribers:=1',
                     f'topics:=[{",".join(images + infos)}]', 'lockstep:=true', 'lockstep_topic:=/tracks',
                     'lockstep_type:=matrix_msgs/msg/TrackArray', 'lockstep_timeout:=60.0')
+    mot = tmp_path / 'tracks.txt'
     try:
         player_out = player.communicate(timeout=240)[0]
-        time.sleep(1)   # the recorder gets the last frame's messages
-    finally:
-        fuse_out, rec_out = _stop([fuse, recorder])
+        # the recorder got the last frame's tracks (its MOT text is flushed per message)
+        wait_for(lambda: mot.is_file() and any(line.split()[0] == str(FRAMES - 1) for line in mot.read_text()
+                                               .splitlines()), 30, f'the last frame in {mot}')
+    finally:   # upstream first: the recorder takes the rest of what fuse published while fuse shuts down
+        fuse_out, rec_out = stop(fuse), stop(recorder)
         if player.poll() is None:
-            _stop([player])
+            stop(player)
     assert f'played {FRAMES} frames' in player_out and 'lockstep: only' not in player_out, player_out + fuse_out
     assert 'missing' not in fuse_out and 'Traceback' not in fuse_out, fuse_out
     assert f'published {FRAMES} frames' in fuse_out, fuse_out
@@ -95,20 +79,17 @@ def test_live_graph_equals_offline(node_executable, tmp_path):
 
 
 def _wait_for_endpoints(topic: str, publishers: int, subscribers: int, timeout: float = 60.0) -> None:
-    """Until this process's DDS graph shows the endpoints, plus a second for the nodes' own matching."""
+    """Until this process's DDS graph shows the endpoints of two other processes. Their own matching cannot be
+    seen from here; the recorder asks for the publishers' history, so a late match loses nothing."""
     import rclpy
     from rclpy.context import Context
 
     context = Context()
     rclpy.init(context=context)
     node = rclpy.create_node('fuse_graph_test_probe', context=context)
-    try:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not (node.count_publishers(topic) >= publishers
-                                                     and node.count_subscribers(topic) >= subscribers):
-            time.sleep(0.1)
-        assert node.count_publishers(topic) >= publishers and node.count_subscribers(topic) >= subscribers, topic
-        time.sleep(1.0)
+    try:   # the graph cache fills without spinning
+        wait_for(lambda: node.count_publishers(topic) >= publishers and node.count_subscribers(topic) >= subscribers,
+                 timeout, f'{publishers} publishers and {subscribers} subscribers on {topic}')
     finally:
         node.destroy_node()
         rclpy.shutdown(context=context)

@@ -12,18 +12,16 @@ the recording with ``matrix-tracker evaluate-recording OUT/recording --ground-tr
 """
 
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument, OpaqueFunction, SetEnvironmentVariable
-from launch.substitutions import LaunchConfiguration
+from launch.actions import OpaqueFunction, SetEnvironmentVariable
 from launch_ros.actions import Node
 
 from matrix_bringup.graph import GraphSettings, graph_nodes
-from matrix_core.settings import setting_to_string, settings_fields, settings_from_strings
+from matrix_ros.launch_settings import declare_arguments, settings_from_launch
 
 
 def _graph(context):
     """Resolved at launch time: the number of processes depends on ``views`` and ``drones_per_process``."""
-    settings = settings_from_strings(GraphSettings, {name: LaunchConfiguration(name).perform(context)
-                                                     for name, *_ in settings_fields(GraphSettings)})
+    settings = settings_from_launch(GraphSettings, context)
     actions = [SetEnvironmentVariable('FASTRTPS_DEFAULT_PROFILES_FILE', settings.dds_profile)] \
         if settings.dds_profile else []
     for node in graph_nodes(settings):
@@ -34,6 +32,4 @@ def _graph(context):
 
 
 def generate_launch_description():
-    args = [DeclareLaunchArgument(name, default_value=setting_to_string(default), description=help_text)
-            for name, _, default, help_text in settings_fields(GraphSettings)]
-    return LaunchDescription(args + [OpaqueFunction(function=_graph)])
+    return LaunchDescription(declare_arguments(GraphSettings) + [OpaqueFunction(function=_graph)])

@@ -22,9 +22,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from matrix_core.bags import bag_topics
+from matrix_core.datasets.matrix_conventions import MATRIX_VIEWS
 from matrix_core.settings import setting_to_string
 
-VIEWS = [f'D{i}' for i in range(1, 9)]
+VIEWS = list(MATRIX_VIEWS)
 RECORDED = (('/tracks', 'matrix_msgs/msg/TrackArray'), ('/detections', 'matrix_msgs/msg/TrackArray'),
             ('/bev_heatmap', 'nav_msgs/msg/OccupancyGrid'), ('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray'))
 PER_VIEW_RECORDED = (('camera_info', 'sensor_msgs/msg/CameraInfo'), ('pose', 'geometry_msgs/msg/PoseStamped'),

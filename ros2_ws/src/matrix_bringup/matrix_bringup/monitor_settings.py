@@ -3,14 +3,14 @@
 from dataclasses import dataclass, field
 
 from matrix_core import topics
-from matrix_core.datasets.matrix_conventions import MATRIX_AREA
+from matrix_core.datasets.matrix_conventions import MATRIX_AREA, MATRIX_VIEWS
 
 STAGES = ('register', 'calib', 'tracks')
 
 
 @dataclass
 class GraphMonitorSettings:
-    views: list[str] = field(default_factory=lambda: [f'D{i}' for i in range(1, 9)],
+    views: list[str] = field(default_factory=lambda: list(MATRIX_VIEWS),
                              metadata={'help': 'views to score'})
     expected_frames: int = field(default=0, metadata={
         'help': 'stop after this many frames are done (0 = on idle_timeout only)'})

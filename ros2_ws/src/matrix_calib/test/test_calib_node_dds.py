@@ -2,9 +2,6 @@
 (``dataset_player``) publishes over DDS; this test process checks its CameraInfo, pose and diagnostics
 against the stored calibration, and that corrupt input is logged without stopping the node."""
 
-import subprocess
-import time
-
 import numpy as np
 import pytest
 import rclpy
@@ -16,29 +13,13 @@ from sensor_msgs.msg import CameraInfo, CompressedImage
 from matrix_core.datasets import MatrixDataset
 from matrix_core.geometry.camera import rotation_angle_deg
 from matrix_ros.conversions import camera_info_to_camera, pose_to_world_T_cam, stamp_to_seconds
+from ros_helpers import spin_until, start_node, stop, stop_all, wait_matched
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 VIEWS = ('D1', 'D5')  # two drones hosted by one calib process
 FRAMES = 5  # frames published, each must come back (ok, or stale with its age)
 PUBLISHED = FRAMES
-
-
-def _spin_until(node, done, processes, timeout_s):
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline and not done() and all(p.poll() is None for p in processes):
-        rclpy.spin_once(node, timeout_sec=0.1)
-
-
-def _stop(processes):
-    outs = []
-    for p in processes:
-        p.terminate()
-        try:
-            outs.append(p.communicate(timeout=20)[0])
-        except subprocess.TimeoutExpired:
-            p.kill()
-            outs.append(p.communicate()[0])
-    return '\n'.join(outs)
+STARTUP_S = 120   # a node process starts and matches in seconds, minutes on a loaded machine
 
 
 def test_calib_node_matches_stored_calibration(matrix_sample, node_executable):
@@ -47,31 +28,28 @@ def test_calib_node_matches_stored_calibration(matrix_sample, node_executable):
     node = Node('calib_test_listener')
     got = {(v, kind): [] for v in VIEWS for kind in ('info', 'pose')}
     diags = []
+    outputs = []
     for v in VIEWS:
-        node.create_subscription(CameraInfo, f'/{v}/camera_info', lambda m, v=v: got[(v, 'info')].append(m), 10)
-        node.create_subscription(PoseStamped, f'/{v}/pose', lambda m, v=v: got[(v, 'pose')].append(m), 10)
+        outputs += [
+            node.create_subscription(CameraInfo, f'/{v}/camera_info', lambda m, v=v: got[(v, 'info')].append(m), 10),
+            node.create_subscription(PoseStamped, f'/{v}/pose', lambda m, v=v: got[(v, 'pose')].append(m), 10)]
     node.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 50)
-    calib = subprocess.Popen(
-        [str(node_executable('matrix_calib', 'calib')), '--ros-args', '-p', f'views:=[{",".join(VIEWS)}]',
-         '-p', f'prior_dataset:={matrix_sample}', '-p', 'qos:=reliable',
-         # intrinsics (only K, D, size) from the player's stored CameraInfo stream, as a drone driver would send
-         '-p', 'intrinsics_topic:=ground_truth/camera_info'],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    # Start the images only once calib's outputs are matched to this listener: results published before
-    # discovery finishes would be lost (volatile durability), and the tracker would start mid-sequence.
-    outputs = [f'/{v}/{t}' for v in VIEWS for t in ('camera_info', 'pose')]
-    _spin_until(node, lambda: all(node.count_publishers(t) >= 1 for t in outputs), [calib], 30)
-    time.sleep(1.0)
-    player = subprocess.Popen(
-        [str(node_executable('matrix_ros', 'dataset_player')), '--ros-args', '-p', f'dataset:={matrix_sample}',
-         '-p', f'views:=[{",".join(VIEWS)}]', '-p', f'max_frames:={PUBLISHED}', '-p', 'rate:=0.4',
-         '-p', 'wait_for_subscribers:=1'],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    calib = start_node(node_executable('matrix_calib', 'calib'), f'views:=[{",".join(VIEWS)}]',
+                       f'prior_dataset:={matrix_sample}', 'qos:=reliable',
+                       # intrinsics (only K, D, size) from the player's stored CameraInfo, as a drone driver sends
+                       'intrinsics_topic:=ground_truth/camera_info')
+    processes = [calib]
     try:
-        _spin_until(node, lambda: all(len(x) >= FRAMES for x in got.values()) and len(diags) >= len(VIEWS) * FRAMES,
-                    [calib, player], 120)
+        # Start the images only once calib's outputs are matched to this listener: results published before
+        # discovery finishes would be lost (volatile durability), and the tracker would start mid-sequence.
+        wait_matched(node, outputs, [calib], STARTUP_S)
+        processes.insert(0, start_node(node_executable('matrix_ros', 'dataset_player'), f'dataset:={matrix_sample}',
+                                       f'views:=[{",".join(VIEWS)}]', f'max_frames:={PUBLISHED}', 'rate:=0.4',
+                                       'wait_for_subscribers:=1'))
+        spin_until(node, lambda: all(len(x) >= FRAMES for x in got.values()) and len(diags) >= len(VIEWS) * FRAMES,
+                   processes, 120)
     finally:
-        out = _stop([player, calib])
+        out = '\n'.join(stop_all(processes))   # the player first
         node.destroy_node()
         rclpy.shutdown()
     status_of = {(st.hardware_id, stamp_to_seconds(d.header.stamp)): st for d in diags for st in d.status}
@@ -110,21 +88,18 @@ def test_calib_node_survives_bad_input(matrix_sample, node_executable):
     node = Node('calib_bad_input_test')
     pub = node.create_publisher(CompressedImage, '/D5/image/compressed', 10)
     diags = []
-    node.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 10)
-    calib = subprocess.Popen(
-        [str(node_executable('matrix_calib', 'calib')), '--ros-args', '-p', 'views:=[D5]', '-p', 'compressed:=true',
-         '-p', f'prior_dataset:={matrix_sample}', '-p', 'qos:=reliable'],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    diag_sub = node.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 10)
+    calib = start_node(node_executable('matrix_calib', 'calib'), 'views:=[D5]', 'compressed:=true',
+                       f'prior_dataset:={matrix_sample}', 'qos:=reliable')
     good = (matrix_sample / 'image_subsets/D5/0000.jpg').read_bytes()
     try:
-        _spin_until(node, lambda: pub.get_subscription_count() > 0, [calib], 30)
-        for data in (b'', b'\xff\xd8 not a jpeg', good):
+        wait_matched(node, [pub, diag_sub], [calib], STARTUP_S)
+        for k, data in enumerate((b'', b'\xff\xd8 not a jpeg', good), 1):
             pub.publish(CompressedImage(format='jpeg', data=data))
-            _spin_until(node, lambda: False, [calib], 1.0)
-        _spin_until(node, lambda: len(diags) >= 3, [calib], 60)
+            spin_until(node, lambda: len(diags) >= k, [calib], 60)   # one image at a time: in order
         alive = calib.poll() is None
     finally:
-        out = _stop([calib])
+        out = stop(calib)
         node.destroy_node()
         rclpy.shutdown()
     assert alive, f'calib died on bad input:\n{out}'

@@ -3,9 +3,6 @@ real MATRIX images of drone D5 and registrations of the same stamps (ground trut
 one, a NaN one) and checks from calib's diagnostics which frames the registration guided, and that every
 frame was still calibrated."""
 
-import subprocess
-import time
-
 import numpy as np
 import pytest
 import rclpy
@@ -18,18 +15,12 @@ from std_msgs.msg import Header
 from matrix_core.datasets import MatrixDataset
 from matrix_ros.conversions import image_to_compressed, seconds_to_stamp, stamp_to_seconds
 from matrix_ros.qos import qos_by_name
+from ros_helpers import spin_for, spin_until, start_node, stop, wait_matched
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 # What each frame's registration is, and how calib's diagnostics must say the frame was guided.
 PLAN = [('truth', 'registration'), ('failed', 'homography ('), ('none', 'homography ('),
         ('nan', 'registration homography unusable; homography ('), ('truth', 'registration')]
-
-
-def _spin_until(node, done, process, timeout_s):
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline and not done() and process.poll() is None:
-        rclpy.spin_once(node, timeout_sec=0.05)
-    return done()
 
 
 def _registration(header, dataset, frame, kind) -> HomographyStamped:
@@ -47,30 +38,29 @@ def test_calib_follows_the_registration_and_copes_without_it(matrix_sample, node
     node = Node('calib_registration_test')
     images = node.create_publisher(CompressedImage, '/D5/image/compressed', qos_by_name('reliable'))
     diags = {}
-    node.create_subscription(DiagnosticArray, '/diagnostics', lambda m: diags.update(
+    diag_sub = node.create_subscription(DiagnosticArray, '/diagnostics', lambda m: diags.update(
         {round(stamp_to_seconds(m.header.stamp), 3): s for s in m.status if s.name == 'calib/D5'}), 50)
-    calib = subprocess.Popen(
-        [str(node_executable('matrix_calib', 'calib')), '--ros-args', '-p', 'views:=[D5]', '-p', 'compressed:=true',
-         '-p', f'prior_dataset:={matrix_sample}', '-p', 'qos:=reliable', '-p', 'use_registration:=true',
-         '-p', 'registration_wait_s:=1.0'],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    calib = start_node(node_executable('matrix_calib', 'calib'), 'views:=[D5]', 'compressed:=true',
+                       f'prior_dataset:={matrix_sample}', 'qos:=reliable', 'use_registration:=true',
+                       'registration_wait_s:=1.0')
     try:
-        assert _spin_until(node, lambda: node.count_subscribers('/D5/homography') == 1, calib, 30)
-        _spin_until(node, lambda: False, calib, 2.0)
+        assert spin_until(node, lambda: node.count_subscribers('/D5/homography') == 1, [calib], 120)
+        # What is tested: for 2 s without a registration publisher, calib subscribes no images.
+        spin_for(node, 2.0)
         unconnected = images.get_subscription_count()   # no registration publisher yet: no image subscription
         registrations = node.create_publisher(HomographyStamped, '/D5/homography', 10)
-        assert _spin_until(node, lambda: images.get_subscription_count() == 1, calib, 30)
-        _spin_until(node, lambda: False, calib, 1.0)
+        # calib subscribes the images once its registration subscription matched this publisher; this
+        # publisher's side of that match is waited for too, so that no registration is lost.
+        wait_matched(node, [images, registrations, diag_sub], [calib], 60)
         for k, (kind, _) in enumerate(PLAN):
             frame, stamp = dataset.frames[k], 1.0 + 0.5 * k
             header = Header(stamp=seconds_to_stamp(stamp), frame_id='D5/camera_optical')
             images.publish(image_to_compressed(dataset.load_image('D5', frame), header))
             if kind != 'none':
                 registrations.publish(_registration(header, dataset, frame, kind))
-            assert _spin_until(node, lambda: round(stamp, 3) in diags, calib, 60), (stamp, kind)
+            assert spin_until(node, lambda: round(stamp, 3) in diags, [calib], 60), (stamp, kind)
     finally:
-        calib.terminate()
-        out = calib.communicate(timeout=20)[0]
+        out = stop(calib)
         node.destroy_node()
         rclpy.shutdown()
     assert unconnected == 0

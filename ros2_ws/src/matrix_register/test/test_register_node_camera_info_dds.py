@@ -6,9 +6,6 @@ AFTER it its CameraInfo (same stamp; the node must pair them by stamp, not take 
 then three frames. The homographies are checked against the ground truth from the stored calibrations.
 """
 
-import subprocess
-import time
-
 import numpy as np
 import pytest
 import rclpy
@@ -21,6 +18,7 @@ from matrix_core.datasets import MatrixDataset
 from matrix_core.register.evaluate import homography_error_px
 from matrix_core.register.settings import MATRIX_BLOCK
 from matrix_ros.conversions import camera_to_camera_info, image_to_msg, seconds_to_stamp, stamp_to_seconds
+from ros_helpers import spin_for, spin_until, start_node, stop, wait_matched
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
@@ -29,52 +27,40 @@ ORPHAN_S, REFERENCE_S = 0.5, 1.0          # stamps: an image without CameraInfo,
 FRAME_S = {2.0: 0, 2.5: 2, 3.0: 4}        # stamp -> frame of the sample
 
 
-def _spin_for(node, seconds, until=lambda: False, process=None):
-    deadline = time.monotonic() + seconds
-    while time.monotonic() < deadline and not until() and (process is None or process.poll() is None):
-        rclpy.spin_once(node, timeout_sec=0.05)
-
-
 def test_reference_from_camera_info_over_dds(matrix_sample, node_executable):
     dataset = MatrixDataset(matrix_sample)
     ref_cam = dataset.reference_camera(VIEW)
-    register = subprocess.Popen(
-        [str(node_executable('matrix_register', 'register')), '--ros-args', '-p', f'views:=[{VIEW}]'],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    register = start_node(node_executable('matrix_register', 'register'), f'views:=[{VIEW}]')
     rclpy.init()
     got = {}
     node = Node('register_camera_info_test')
     try:
-        node.create_subscription(HomographyStamped, f'/{VIEW}/homography',
-                                 lambda m: got.__setitem__(stamp_to_seconds(m.header.stamp), m), 10)
+        homographies = node.create_subscription(HomographyStamped, f'/{VIEW}/homography',
+                                                lambda m: got.__setitem__(stamp_to_seconds(m.header.stamp), m), 10)
         image_pub = node.create_publisher(Image, f'/{VIEW}/image_raw', 10)
         info_pub = node.create_publisher(CameraInfo, f'/{VIEW}/camera_info', 10)
-        _spin_for(node, 60.0, lambda: (image_pub.get_subscription_count() and info_pub.get_subscription_count()
-                                       and node.count_publishers(f'/{VIEW}/homography')), register)
+        wait_matched(node, [image_pub, info_pub, homographies], [register], 120.0)
 
         def header(seconds):
             return Header(stamp=seconds_to_stamp(seconds), frame_id=f'{VIEW}/camera_optical')
 
+        # The order of arrival across the image and CameraInfo topics is what is tested, and the node answers
+        # neither image before the reference's CameraInfo: nothing to wait for but time (1 s each).
         image_pub.publish(image_to_msg(dataset.load_image(VIEW, 1), header(ORPHAN_S)))
-        _spin_for(node, 1.0)
+        spin_for(node, 1.0)
         reference = dataset.reference_image(VIEW)
         image_pub.publish(image_to_msg(reference, header(REFERENCE_S)))
-        _spin_for(node, 1.0)  # the reference image is held until its CameraInfo comes
+        spin_for(node, 1.0)  # the reference image is held until its CameraInfo comes
         info_pub.publish(camera_to_camera_info(ref_cam, header(REFERENCE_S)))
         for seconds, frame in FRAME_S.items():
             image_pub.publish(image_to_msg(dataset.load_image(VIEW, frame), header(seconds)))
-            _spin_for(node, 0.3)
-        _spin_for(node, 60.0, lambda: len(got) >= 2 + len(FRAME_S), register)
+            spin_until(node, lambda: seconds in got, [register], 60.0)   # one frame at a time
+        spin_until(node, lambda: len(got) >= 2 + len(FRAME_S), [register], 60.0)
         alive = register.poll() is None
     finally:
         node.destroy_node()
         rclpy.shutdown()
-        register.terminate()
-        try:
-            out, _ = register.communicate(timeout=20)
-        except subprocess.TimeoutExpired:
-            register.kill()
-            out, _ = register.communicate()
+        out = stop(register)
     log = f'register said:\n{out}'
     assert alive, log
     assert sorted(got) == sorted([ORPHAN_S, REFERENCE_S, *FRAME_S]), f'homographies at {sorted(got)}; {log}'

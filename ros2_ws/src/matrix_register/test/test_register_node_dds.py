@@ -6,7 +6,6 @@ homographies, checks them against the ground truth from the stored calibrations,
 image and checks that the node reports it and keeps running.
 """
 
-import subprocess
 import time
 
 import numpy as np
@@ -23,6 +22,7 @@ from matrix_core.register.evaluate import homography_error_px
 from matrix_core.register.ground_mask import visible_ground_grid
 from matrix_core.register.settings import MATRIX_BLOCK
 from matrix_ros.conversions import stamp_to_seconds
+from ros_helpers import spin_until, start_node, stop, wait_matched
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
@@ -30,46 +30,25 @@ VIEWS = ('D3', 'D6')
 FRAMES = 3
 
 
-def _spin_until(node, until, processes, timeout_s):
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline and not until() and all(p.poll() is None for p in processes):
-        rclpy.spin_once(node, timeout_sec=0.1)
-
-
-def _stop(process) -> str:
-    process.terminate()
-    try:
-        out, _ = process.communicate(timeout=20)
-    except subprocess.TimeoutExpired:
-        process.kill()
-        out, _ = process.communicate()
-    return out
-
-
 def test_register_node_over_dds(matrix_sample, node_executable):
     dataset = MatrixDataset(matrix_sample)
     views = '[' + ','.join(VIEWS) + ']'
-    register = subprocess.Popen(
-        [str(node_executable('matrix_register', 'register')), '--ros-args', '-p', f'views:={views}',
-         '-p', f'reference_dataset:={matrix_sample}'],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    register = start_node(node_executable('matrix_register', 'register'), f'views:={views}',
+                          f'reference_dataset:={matrix_sample}')
     rclpy.init()
     got = {v: [] for v in VIEWS}
     diags = []
     node = Node('register_test_listener')
     player = None
     try:
-        for v in VIEWS:
-            node.create_subscription(HomographyStamped, f'/{v}/homography', lambda m, v=v: got[v].append(m), 10)
+        homographies = [node.create_subscription(HomographyStamped, f'/{v}/homography',
+                                                 lambda m, v=v: got[v].append(m), 10) for v in VIEWS]
         node.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 10)
         # Start the images only once the register node is up and this listener is connected to it.
-        _spin_until(node, lambda: all(node.count_publishers(f'/{v}/homography') for v in VIEWS), [register], 60.0)
-        player = subprocess.Popen(
-            [str(node_executable('matrix_ros', 'dataset_player')), '--ros-args', '-p', f'dataset:={matrix_sample}',
-             '-p', f'views:={views}', '-p', f'max_frames:={FRAMES}', '-p', 'rate:=2.0',
-             '-p', 'wait_for_subscribers:=1'],
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        _spin_until(node, lambda: all(len(m) >= FRAMES for m in got.values()), [register, player], 120.0)
+        wait_matched(node, homographies, [register], 120.0)
+        player = start_node(node_executable('matrix_ros', 'dataset_player'), f'dataset:={matrix_sample}',
+                            f'views:={views}', f'max_frames:={FRAMES}', 'rate:=2.0', 'wait_for_subscribers:=1')
+        spin_until(node, lambda: all(len(m) >= FRAMES for m in got.values()), [register, player], 120.0)
 
         # Bad input: an image whose data is too short. The node must say so and keep running.
         bad_pub = node.create_publisher(Image, f'/{VIEWS[0]}/image_raw', 10)
@@ -81,16 +60,16 @@ def test_register_node_over_dds(matrix_sample, node_executable):
             return any(s.level == DiagnosticStatus.ERROR and 'bad input' in s.message
                        for d in diags for s in d.status)
 
-        deadline = time.monotonic() + 30.0
+        deadline = time.monotonic() + 30.0   # sent again each second: the new publisher may not be matched yet
         while time.monotonic() < deadline and not bad_reported() and register.poll() is None:
             bad_pub.publish(bad)
-            _spin_until(node, bad_reported, [register], 1.0)
+            spin_until(node, bad_reported, [register], 1.0)
         alive = register.poll() is None
     finally:
         node.destroy_node()
         rclpy.shutdown()
-        player_out = _stop(player) if player is not None else '(not started)'
-        register_out = _stop(register)
+        player_out = stop(player) if player is not None else '(not started)'
+        register_out = stop(register)
     log = f'register said:\n{register_out}\nplayer said:\n{player_out}'
     assert alive, f'register node died on a corrupt image; {log}'
     assert bad_reported(), f'no diagnostics error for the corrupt image; {log}'

@@ -2,7 +2,6 @@
 with /clock, and lockstep holds each next frame until the graph acknowledges the previous one. The player
 reads the sequence clock the bag stores (and numbers the frames of its log with it)."""
 
-import subprocess
 import time
 
 import numpy as np
@@ -16,6 +15,7 @@ from matrix_core.bags import SequenceClock, write_sequence_bag
 from matrix_core.datasets import MatrixDataset
 from matrix_ros.conversions import camera_info_to_camera, compressed_to_image, stamp_to_seconds
 from matrix_ros.qos import publisher_qos
+from ros_helpers import finish, start_node
 
 pytestmark = pytest.mark.ros
 
@@ -26,21 +26,9 @@ def sample_bag(matrix_sample, tmp_path_factory):
                               compressed=True, progress=False)
 
 
-def _finish(process, timeout=30) -> str:
-    """Output of ``process``; it is killed if it has not exited within ``timeout`` (no orphans)."""
-    try:
-        return process.communicate(timeout=timeout)[0]
-    except subprocess.TimeoutExpired:
-        process.kill()
-        return process.communicate()[0] + '\n[killed: did not exit]'
-
-
 def _player(node_executable, bag, *params):
-    args = [str(node_executable('matrix_ros', 'bag_player')), '--ros-args', '-p', f'bag:={bag}',
-            '-p', 'topics:=[/D3/image/compressed,/D3/ground_truth/camera_info]', '-p', 'wait_for_subscribers:=1']
-    for p in params:
-        args += ['-p', p]
-    return subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    return start_node(node_executable('matrix_ros', 'bag_player'), f'bag:={bag}',
+                      'topics:=[/D3/image/compressed,/D3/ground_truth/camera_info]', 'wait_for_subscribers:=1', *params)
 
 
 def test_replay_is_unchanged_and_publishes_clock(matrix_sample, sample_bag, node_executable):
@@ -56,7 +44,7 @@ def test_replay_is_unchanged_and_publishes_clock(matrix_sample, sample_bag, node
     while time.monotonic() < deadline and (min(len(got['info']), len(got['img']), len(got['clock'])) < 5
                                            or player.poll() is None):
         rclpy.spin_once(node, timeout_sec=0.1)
-    out = _finish(player)
+    out = finish(player, 30)
     node.destroy_node()
     rclpy.shutdown()
     assert player.returncode == 0, out
@@ -85,7 +73,7 @@ def test_player_reads_the_clock_stored_in_the_bag(matrix_sample, node_executable
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and (len(infos) < 5 or player.poll() is None):
         rclpy.spin_once(node, timeout_sec=0.1)
-    out = _finish(player)
+    out = finish(player)
     node.destroy_node()
     rclpy.shutdown()
     assert player.returncode == 0, out
@@ -110,7 +98,7 @@ def test_lockstep_waits_for_the_graph(sample_bag, node_executable):
         if acked < len(arrivals) and time.monotonic() - arrivals[acked][0] > 0.8:
             ack.publish(PointStamped(header=arrivals[acked][1]))  # "processed" 0.8 s after arrival
             acked += 1
-    out = _finish(player, timeout=5)
+    out = finish(player, 5)
     node.destroy_node()
     rclpy.shutdown()
     assert player.returncode == 0 and len(arrivals) == 5, out

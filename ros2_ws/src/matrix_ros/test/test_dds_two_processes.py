@@ -4,9 +4,6 @@ The publisher is the installed ``dataset_player`` executable in its own process;
 subscribes, and checks that every byte of the image and the calibration arrives unchanged.
 """
 
-import subprocess
-import time
-
 import numpy as np
 import pytest
 import rclpy
@@ -15,6 +12,7 @@ from sensor_msgs.msg import CameraInfo, Image
 
 from matrix_core.datasets import MatrixDataset
 from matrix_ros.conversions import camera_info_to_camera, msg_to_image, stamp_to_seconds
+from ros_helpers import spin_until, start_node, stop
 
 pytestmark = pytest.mark.ros
 
@@ -25,9 +23,7 @@ def _collect(topics_types, until, process, timeout_s=60.0):
     node = Node('dds_test_listener')
     for topic, msg_type in topics_types:
         node.create_subscription(msg_type, topic, lambda m, t=topic: received[t].append(m), 10)
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline and not until(received) and process.poll() is None:
-        rclpy.spin_once(node, timeout_sec=0.1)
+    spin_until(node, lambda: until(received), [process], timeout_s)
     node.destroy_node()
     return received
 
@@ -35,21 +31,13 @@ def _collect(topics_types, until, process, timeout_s=60.0):
 def test_image_and_camera_info_cross_process(matrix_sample, node_executable):
     dataset = MatrixDataset(matrix_sample)
     rclpy.init()
-    player = subprocess.Popen(
-        [str(node_executable('matrix_ros', 'dataset_player')), '--ros-args',
-         '-p', f'dataset:={matrix_sample}', '-p', 'views:=[D3]', '-p', 'max_frames:=2', '-p', 'rate:=4.0',
-         '-p', 'wait_for_subscribers:=1'],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    player = start_node(node_executable('matrix_ros', 'dataset_player'), f'dataset:={matrix_sample}', 'views:=[D3]',
+                        'max_frames:=2', 'rate:=4.0', 'wait_for_subscribers:=1')
     try:
         topics = [('/D3/image_raw', Image), ('/D3/ground_truth/camera_info', CameraInfo)]
         got = _collect(topics, lambda r: all(len(v) >= 2 for v in r.values()), player)
     finally:
-        player.terminate()
-        try:
-            out, _ = player.communicate(timeout=20)
-        except subprocess.TimeoutExpired:
-            player.kill()
-            out = player.communicate()[0]
+        out = stop(player)
         rclpy.shutdown()
     assert len(got['/D3/image_raw']) >= 2, f'no images over DDS; player said:\n{out}'
     assert len(got['/D3/ground_truth/camera_info']) >= 2, f'no CameraInfo over DDS; player said:\n{out}'

@@ -17,6 +17,7 @@ from matrix_core.bags import SequenceClock, bag_topics, read_bag, read_sequence_
 from matrix_core.datasets import MatrixDataset
 from matrix_ros.conversions import camera_to_camera_info, seconds_to_stamp
 from matrix_ros.qos import publisher_qos
+from ros_helpers import start_node, wait_matched
 
 pytestmark = pytest.mark.ros
 
@@ -26,11 +27,9 @@ def test_records_standard_and_custom_messages(matrix_sample, node_executable, tm
     out = tmp_path / 'rec'
 
     def start_recorder():
-        return subprocess.Popen([str(node_executable('matrix_ros', 'recorder')), '--ros-args',
-                                 '-p', f'out:={out}', '-p', 'topics:=[/D2/camera_info,/tracks]',
-                                 '-p', 'types:=[sensor_msgs/msg/CameraInfo,matrix_msgs/msg/TrackArray]',
-                                 '-p', 'tracks_topic:=/tracks'],
-                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        return start_node(node_executable('matrix_ros', 'recorder'), f'out:={out}',
+                          'topics:=[/D2/camera_info,/tracks]',
+                          'types:=[sensor_msgs/msg/CameraInfo,matrix_msgs/msg/TrackArray]', 'tracks_topic:=/tracks')
     procs = []
     try:
         _exercise(start_recorder, procs, ds)
@@ -65,13 +64,13 @@ def _exercise(start_recorder, procs, ds):
         publish(0)
         publish(1)   # before the recorder exists
         procs.append(rec := start_recorder())
-        deadline = time.monotonic() + 30
-        while (info_pub.get_subscription_count() < 1 or track_pub.get_subscription_count() < 2) \
-                and time.monotonic() < deadline:
-            rclpy.spin_once(node, timeout_sec=0.1)
+        wait_matched(node, [info_pub], [rec], 60)
+        wait_matched(node, [track_pub], [rec], 60, count=2)   # the bag's subscription and the MOT text's
         publish(2)   # no wait for the recorder's side of the matching: history covers it
         for pub in (info_pub, track_pub):
             pub.wait_for_all_acked(rclpy.duration.Duration(seconds=5))
+        # Acknowledged is received, not yet written, and the bag's writes cannot be seen from outside (it
+        # is written on close): a fixed second for the recorder to take the third frame before SIGTERM.
         time.sleep(1.0)
         rec.send_signal(signal.SIGTERM)
         try:

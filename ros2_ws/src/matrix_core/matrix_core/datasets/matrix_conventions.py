@@ -185,6 +185,9 @@ def view_name(drone_number: int) -> str:
     return f'D{drone_number}'
 
 
+MATRIX_VIEWS = tuple(view_name(n) for n in range(1, 9))   # the eight drones of the MATRIX scenes
+
+
 def drone_number(view: str) -> int:
     """View name ('D3') -> 1-based drone number (3). JSON ``viewNum`` is this minus one."""
     if not (view.startswith('D') and view[1:].isdigit()):

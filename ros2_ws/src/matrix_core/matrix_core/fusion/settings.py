@@ -4,7 +4,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from matrix_core import topics
-from matrix_core.datasets.matrix_conventions import MATRIX_AREA
+from matrix_core.datasets.matrix_conventions import MATRIX_AREA, MATRIX_VIEWS
 from matrix_core.tracking.settings import TrackerSettings
 
 INPUT_KINDS = ('homography', 'camera_info')
@@ -22,7 +22,7 @@ class FuseSettings(TrackerSettings):
     """Everything the fusion of N views needs. Seconds, metres. ``frame_interval_s`` (from the tracker
     settings) is the frame period of the streams."""
 
-    views: list[str] = field(default_factory=lambda: [f'D{i}' for i in range(1, 9)], metadata={
+    views: list[str] = field(default_factory=lambda: list(MATRIX_VIEWS), metadata={
         'help': 'drones to fuse, in the order the network sees them'})
     image_kind: str = field(default='raw', metadata={
         'help': 'raw (sensor_msgs/Image on image_topic), compressed (CompressedImage on compressed_topic) or both'})
