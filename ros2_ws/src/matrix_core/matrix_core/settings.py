@@ -5,6 +5,26 @@ whose arguments are strings, use :func:`setting_to_string` and :func:`settings_f
 import argparse
 import dataclasses
 import typing
+from pathlib import Path
+
+import yaml
+
+
+def read_yaml(path) -> dict:
+    """The mapping in a YAML config file ({} for an empty file); ValueError naming the file when it is not
+    valid YAML or not a mapping, FileNotFoundError when it does not exist."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f'config file not found: {path}')
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ValueError(f'{path}: not valid YAML: {exc}') from exc
+    if data is None:
+        return {}
+    if not isinstance(data, dict):
+        raise ValueError(f'{path}: expected a mapping of keys to values, got {type(data).__name__}')
+    return data
 
 
 def settings_fields(cls) -> list:

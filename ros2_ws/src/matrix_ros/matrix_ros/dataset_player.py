@@ -47,11 +47,8 @@ class DatasetPlayer(Node):
         super().__init__('dataset_player')
         self.settings = s = declare_settings(self, DatasetPlayerSettings, defaults)
         self.dataset = open_dataset(s.dataset)
-        self.frames = list(self.dataset.frames)[:s.max_frames or None]
-        unknown = set(s.views) - set(self.dataset.views)
-        if unknown:
-            raise DatasetError(f'views {sorted(unknown)} not in {s.dataset} (it has {self.dataset.views})')
-        self.views = list(s.views) or list(self.dataset.views)
+        self.frames = self.dataset.select_frames(s.max_frames)
+        self.views = self.dataset.select_views(s.views)
         if not self.frames:
             raise DatasetError(f'{s.dataset} has no complete frame to publish')
         qos = publisher_qos(s.qos)

@@ -4,9 +4,9 @@ import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import yaml
 
 from matrix_core.bev.settings import BevSettings
+from matrix_core.settings import read_yaml
 from matrix_core.tracking.settings import TrackerSettings
 
 CONFIG_DIR = Path(__file__).resolve().parent / 'configs'
@@ -83,7 +83,7 @@ def resolve_config_path(name_or_path) -> Path:
 def load_config(name_or_path, overrides: dict = None) -> TrainConfig:
     """Read a YAML config; unknown keys are errors (a typo must not be silently ignored)."""
     path = resolve_config_path(name_or_path)
-    raw = yaml.safe_load(path.read_text()) or {}
+    raw = read_yaml(path)
     raw.update(overrides or {})
     names = {f.name for f in dataclasses.fields(TrainConfig)}
     unknown = set(raw) - names

@@ -23,10 +23,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from matrix_core.calib.board import Checkerboard
 from matrix_core.geometry.camera import Camera, check_intrinsics
+from matrix_core.settings import read_yaml
 
 CONFIG_PACKAGE = 'matrix_calib'
 DEFAULT_CONFIG_NAME = 'matrix_sample.yaml'
@@ -125,8 +125,4 @@ def load_scene(path=None) -> CalibScene:
     path = default_config_path() if not path else Path(path)
     if not path.is_file():
         raise FileNotFoundError(f'calibration config not found: {path}')
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ValueError(f'{path}: not valid YAML: {exc}') from exc
-    return scene_from_dict(data, str(path))
+    return scene_from_dict(read_yaml(path), str(path))

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from matrix_core.cli.selection import add_selection_arguments
 from matrix_core.calib.drone_calibrator import OK, DroneCalibrator
 from matrix_core.calib.evaluation import pose_errors, summarize_errors
 from matrix_core.calib.scene import load_scene
@@ -32,10 +33,7 @@ COLUMNS = ('view', 'frame', 'status', 'rms_px', 'corners', 'pieces_found', 'piec
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser('calibrate', help='estimate every frame\'s camera pose from the ground checkerboards',
                               description=__doc__)
-    p.add_argument('dataset', help='MATRIX-format folder')
-    p.add_argument('--out', required=True, help='output folder')
-    p.add_argument('--views', nargs='*', default=[], help='views to calibrate (default: all)')
-    p.add_argument('--max-frames', type=int, default=0, help='calibrate at most this many frames (0 = all)')
+    add_selection_arguments(p, 'calibrate', 'MATRIX-format folder', 'output folder')
     p.add_argument('--frame-period', type=float, default=0.5, help='seconds between frames (for ages)')
     p.add_argument('--compare', action='store_true', help='print errors against the stored calibrations')
     add_settings_arguments(p, CalibSettings)
@@ -46,11 +44,7 @@ def calibrate_dataset(dataset: MatrixDataset, out: Path, settings: CalibSettings
                       frame_period=0.5, compare=False) -> list:
     """Run the calibration over ``dataset``; returns the status rows (also written to the CSV)."""
     scene = load_scene(settings.config)
-    views = list(views) or list(dataset.views)
-    unknown = set(views) - set(dataset.views)
-    if unknown:
-        raise DatasetError(f'views {sorted(unknown)} not in {dataset.root} (it has {dataset.views})')
-    frames = list(dataset.frames)[:max_frames or None]
+    views, frames = dataset.select_views(views), dataset.select_frames(max_frames)
     writer = MatrixWriter(out, area=dataset.area, extra_meta={'calibrated_from': str(dataset.root)})
     rows = []
     with tqdm(total=len(views) * len(frames), desc='calibrate', unit='image') as bar:

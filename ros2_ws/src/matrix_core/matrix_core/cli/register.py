@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from matrix_core.cli.selection import add_selection_arguments
 from matrix_core.datasets import DatasetError, MatrixDataset, open_dataset
 from matrix_core.datasets import matrix_conventions as conv
 from matrix_core.register.backends import make_backend
@@ -44,10 +45,8 @@ from matrix_core.settings import add_settings_arguments, settings_from_namespace
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser('register', help="register each drone's frames to its reference image",
                               description=__doc__)
-    p.add_argument('dataset', help='MATRIX folder (real or simulated)')
-    p.add_argument('--out', required=True, help='output folder (gets a registration/ subfolder)')
-    p.add_argument('--views', nargs='*', default=[], help='drones to register, e.g. D1 D3 (default: all)')
-    p.add_argument('--max-frames', type=int, default=0, help='register at most this many frames (0 = all)')
+    add_selection_arguments(p, 'register', 'MATRIX folder (real or simulated)',
+                            'output folder (gets a registration/ subfolder)')
     p.add_argument('--png', type=int, nargs='?', const=1, default=0, metavar='K',
                    help='overlay PNG of every K-th frame (bare --png: every frame); default: the first frame '
                         'of each drone only')
@@ -114,11 +113,7 @@ def run(args) -> int:
     settings, note = settings_for_dataset(settings_from_namespace(RegisterSettings, args), dataset)
     if note:
         print(note)
-    views = list(args.views) or list(dataset.views)
-    unknown = set(views) - set(dataset.views)
-    if unknown:
-        raise DatasetError(f'views {sorted(unknown)} not in {args.dataset} (it has {dataset.views})')
-    frames = list(dataset.frames)[:args.max_frames or None]
+    views, frames = dataset.select_views(args.views), dataset.select_frames(args.max_frames)
     out = Path(args.out) / 'registration'
     out.mkdir(parents=True, exist_ok=True)
     backend = make_backend(settings)

@@ -70,6 +70,17 @@ class MultiviewDataset(ABC):
     def frames(self) -> tuple:
         """Frame numbers that have images for every view."""
 
+    def select_views(self, views=()) -> list:
+        """``views`` (all when empty), checked: :class:`DatasetError` names those the dataset does not have."""
+        unknown = set(views) - set(self.views)
+        if unknown:
+            raise DatasetError(f'views {sorted(unknown)} not in {self.root} (it has {list(self.views)})')
+        return list(views) or list(self.views)
+
+    def select_frames(self, max_frames: int = 0) -> list:
+        """The first ``max_frames`` frames (all when 0)."""
+        return list(self.frames)[:max_frames or None]
+
     @abstractmethod
     def image_path(self, view: str, frame: int) -> Path:
         """Path of the image of ``view`` at ``frame``."""

@@ -13,9 +13,9 @@ import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import yaml
 
 from matrix_core.datasets.matrix_conventions import MATRIX_AREA
+from matrix_core.settings import read_yaml
 
 CONFIG_DIR = Path(__file__).resolve().parent / 'configs'
 VARIANTS = ('simple', 'complex', 'modified')
@@ -183,11 +183,7 @@ def load_scene_config(name_or_path) -> SceneConfig:
     if not path.is_file():
         raise FileNotFoundError(f'scene config {name_or_path!r} is neither a variant {VARIANTS} nor a file')
     try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ValueError(f'{path}: not valid YAML: {exc}') from exc
-    try:
-        return scene_config_from_dict(data or {})
+        return scene_config_from_dict(read_yaml(path))
     except (TypeError, ValueError) as exc:
         raise ValueError(f'{path}: {exc}') from exc
 
