@@ -8,6 +8,7 @@ export PATH="$VENV/bin:$PATH" VENV
 # colcon and ament look for the ROS packages under these prefixes; the pip wheels install into the venv.
 export AMENT_PREFIX_PATH="$VENV" CMAKE_PREFIX_PATH="$VENV"
 bash scripts/fix_ros_wheel_paths.sh
+bash scripts/build_cli.sh
 cd ros2_ws
 colcon --log-base log build --symlink-install --base-paths src --build-base build --install-base install \
   --event-handlers console_direct- console_cohesion- summary+ status- 2>&1 | tail -n 5

@@ -4,6 +4,11 @@ export VENV="${VENV:-$_root/.venv}"
 export PATH="$VENV/bin:$PATH"
 export AMENT_PREFIX_PATH="$VENV${AMENT_PREFIX_PATH:+:$AMENT_PREFIX_PATH}"
 export CMAKE_PREFIX_PATH="$VENV${CMAKE_PREFIX_PATH:+:$CMAKE_PREFIX_PATH}"
+# The ros2 CLI and launch built by scripts/build_cli.sh, unless a real ROS 2 install already gives `ros2`.
+if [ -f "$_root/ros2_ws/cli_overlay/install/local_setup.sh" ] && ! command -v ros2 >/dev/null 2>&1; then
+  set +u
+  COLCON_CURRENT_PREFIX="$_root/ros2_ws/cli_overlay/install" . "$_root/ros2_ws/cli_overlay/install/local_setup.sh"
+fi
 if [ -f "$_root/ros2_ws/install/setup.sh" ]; then
   set +u
   COLCON_CURRENT_PREFIX="$_root/ros2_ws/install" . "$_root/ros2_ws/install/setup.sh"
