@@ -3,7 +3,8 @@ optionally graph_monitor.
 
 The processes and their parameters come from ``matrix_bringup.graph.graph_nodes``: the same list that
 ``run_graph`` starts where there is no ``ros2 launch``. The launch arguments are the fields of
-``matrix_bringup.graph.GraphSettings`` (same names, defaults and descriptions as ``run_graph``'s flags).
+``matrix_bringup.graph.GraphSettings`` (same names, defaults and descriptions as ``run_graph``'s flags), plus
+``exit_at_end``: the replay ends by itself (``matrix_bringup.replay_end``).
 
     ros2 launch matrix_bringup full_graph.launch.py bag:=BAG dataset:=DIR [record:=OUT/recording] [monitor:=true]
 
@@ -12,11 +13,19 @@ the recording with ``matrix-tracker evaluate-recording OUT/recording --ground-tr
 """
 
 from launch import LaunchDescription
-from launch.actions import OpaqueFunction, SetEnvironmentVariable
+from launch.actions import DeclareLaunchArgument, OpaqueFunction, SetEnvironmentVariable
+from launch.conditions import IfCondition
+from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 
 from matrix_bringup.graph import GraphSettings, graph_nodes
+from matrix_bringup.replay_end import ReplayEnd
 from matrix_ros.launch_settings import declare_arguments, settings_from_launch
+
+EXIT_AT_END = DeclareLaunchArgument('exit_at_end', default_value='true', description=(
+    'true: once the player has played the bag and the last frame is processed (and the monitor, if any, has '
+    'written its scores) every node is stopped and the launch exits: 0, or 1 when lockstep timed out for '
+    'some frame or a node died; false: the nodes keep running after the replay'))
 
 
 def _graph(context):
@@ -24,12 +33,16 @@ def _graph(context):
     settings = settings_from_launch(GraphSettings, context)
     actions = [SetEnvironmentVariable('FASTRTPS_DEFAULT_PROFILES_FILE', settings.dds_profile)] \
         if settings.dds_profile else []
-    for node in graph_nodes(settings):
-        actions.append(Node(package=node.package, executable=node.executable, name=node.name,
-                            namespace=node.namespace or None, output='screen',
-                            parameters=[*node.param_files, node.parameters]))
-    return actions
+    specs = graph_nodes(settings)
+    nodes = {spec.label: Node(package=spec.package, executable=spec.executable, name=spec.name,
+                              namespace=spec.namespace or None, output='screen',
+                              parameters=[*spec.param_files, spec.parameters]) for spec in specs}
+    if IfCondition(LaunchConfiguration('exit_at_end')).evaluate(context):
+        monitor = next((s.label for s in specs if s.executable == 'graph_monitor'), None)
+        actions += ReplayEnd(nodes, player=specs[-1].label, monitor=monitor,
+                             monitor_timeout_s=settings.lockstep_timeout).handlers()
+    return actions + list(nodes.values())
 
 
 def generate_launch_description():
-    return LaunchDescription(declare_arguments(GraphSettings) + [OpaqueFunction(function=_graph)])
+    return LaunchDescription(declare_arguments(GraphSettings) + [EXIT_AT_END, OpaqueFunction(function=_graph)])

@@ -159,6 +159,12 @@ class BagFacts:
         return cls(bool(compressed), max(raw or compressed), gt, played)
 
 
+def player_exit_text(code: int) -> str:
+    """What the bag player's exit code means (matrix_ros.bag_player), for run_graph's and the launch's logs."""
+    return {0: ' (every frame played and processed)', 1: ' (nothing was played)',
+            3: ' (lockstep timed out for some frame)'}.get(code, '')
+
+
 def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
     """The graph's processes, in start order (the player last: it waits for the others' subscriptions)."""
     from matrix_core.calib.scene import config_for_dataset

@@ -23,7 +23,7 @@ import sys
 import time
 from pathlib import Path
 
-from matrix_bringup.graph import GraphSettings, NodeSpec, graph_nodes
+from matrix_bringup.graph import GraphSettings, NodeSpec, graph_nodes, player_exit_text
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
 _PR_SET_PDEATHSIG = 1
@@ -134,8 +134,7 @@ def run(settings: GraphSettings, log_dir: Path, stop_timeout: float = 10.0, echo
             echo(''.join(graph.log_path(spec).read_text().splitlines(keepends=True)[-15:]))
         return 4
     code = graph.procs[player].returncode
-    echo(f'run_graph: player exited with {code}'
-         + {0: ' (every frame played and processed)', 3: ' (lockstep timed out for some frame)'}.get(code, ''))
+    echo(f'run_graph: player exited with {code}{player_exit_text(code)}')
     return code
 
 
