@@ -1,8 +1,9 @@
 """One source of wiring: every launch file's arguments are generated from the settings of what it starts, and
 the ROS parameter files under config/ list only values that differ from those settings' defaults.
 
-The launch files run against a stand-in of the launch API (tests/helpers/launch_stand_in.py; there is no
-`launch` package here); full_graph.launch.py is tested with the graph in tests/fusion/test_full_graph_launch.py.
+The launch files are evaluated here with the real launch API, without starting processes (tests/helpers/
+launch_files.py); full_graph.launch.py with the graph in tests/fusion/test_full_graph_launch.py, and every
+launch file started for real with `ros2 launch` in tests/system/test_ros2_launch.py.
 """
 
 from pathlib import Path
@@ -10,7 +11,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from launch_stand_in import declared_arguments, launch, load_launch_file
+from launch_files import declared_arguments, launch, load
 from matrix_core.settings import setting_to_string, settings_fields, settings_from_strings
 
 SRC = Path(__file__).resolve().parents[1] / 'ros2_ws' / 'src'
@@ -55,26 +56,25 @@ def test_every_launch_file_is_tested_here_or_with_the_graph():
 
 
 @pytest.mark.parametrize('path', sorted(NODE_LAUNCH_FILES))
-def test_node_launch_file_arguments_are_the_node_settings(monkeypatch, path):
+def test_node_launch_file_arguments_are_the_node_settings(path):
     package, executable, settings_class, defaults, required = NODE_LAUNCH_FILES[path]
     cls = settings_class()
-    description = load_launch_file(monkeypatch, SRC / path).generate_launch_description()
+    description = load(SRC / path)
     declared = declared_arguments(description)
     fields = {name: (default, help_text) for name, _, default, help_text in settings_fields(cls)}
     assert set(declared) == set(fields)
-    for name, kw in declared.items():
-        assert kw['description'] == fields[name][1] and kw['description'], name
+    for name, (default_text, description_text) in declared.items():
+        assert description_text == fields[name][1] and description_text, name
         if name in required:
-            assert 'default_value' not in kw, name
+            assert default_text is None, name
         else:
-            assert kw['default_value'] == setting_to_string(defaults.get(name, fields[name][0])), name
+            assert default_text == setting_to_string(defaults.get(name, fields[name][0])), name
 
     given = {name: 'x' for name in required}
     actions = launch(description, **given)
     (node,) = actions
-    assert (node.kwargs['package'], node.kwargs['executable'], node.kwargs['name']) == (package, executable,
-                                                                                         executable)
-    (params,) = node.kwargs['parameters']
+    assert (node.package, node.executable, node.name) == (package, executable, executable)
+    (params,) = node.parameters
     expected = settings_from_strings(cls, {**{n: setting_to_string(v) for n, v in defaults.items()}, **given})
     for name in fields:   # every value typed as the node declares it; an empty list is the unset default
         value = getattr(expected, name)
@@ -85,11 +85,10 @@ def test_node_launch_file_arguments_are_the_node_settings(monkeypatch, path):
             assert params[name] == value and type(params[name]) is type(value), name   # 1 is no double
 
 
-def test_launch_arguments_are_parsed_and_validated_by_the_settings(monkeypatch):
-    path = SRC / 'matrix_calib/launch/calib.launch.py'
-    description = load_launch_file(monkeypatch, path).generate_launch_description()
+def test_launch_arguments_are_parsed_and_validated_by_the_settings():
+    description = load(SRC / 'matrix_calib/launch/calib.launch.py')
     (node,) = launch(description, views='[D3, D5]', compressed='true', registration_wait_s='2')
-    params = node.kwargs['parameters'][0]
+    params = node.parameters[0]
     assert params['views'] == ['D3', 'D5'] and params['compressed'] is True and params['registration_wait_s'] == 2.0
     with pytest.raises(ValueError, match='fastest'):
         launch(description, qos='fastest')

@@ -1,9 +1,8 @@
 """The live graph as data (matrix_bringup.graph) and the launch file built on it.
 
-`ros2 launch` cannot run here (no `launch` package in the pip environment), so the launch file is
-executed against a minimal stand-in of the `launch` / `launch_ros` API it uses (recording what it is
-given) and must produce exactly the processes of `graph_nodes`, which `run_graph` starts for real
-(tests/system/test_run_graph.py)."""
+The launch file's description is evaluated with the real launch API (tests/helpers/launch_files.py, no
+process started) and must produce exactly the processes of `graph_nodes`, which `run_graph` starts for real
+(tests/system/test_run_graph.py); `ros2 launch` runs it for real in tests/system/test_ros2_launch.py."""
 
 from pathlib import Path
 
@@ -12,7 +11,8 @@ import yaml
 
 from matrix_bringup.graph import BagFacts, GraphSettings, NodeSpec, graph_nodes
 from matrix_core.settings import settings_fields
-from launch_stand_in import declared_arguments, launch, launch_parameter_ok, load_launch_file
+from launch.actions import RegisterEventHandler, SetEnvironmentVariable
+from launch_files import declared_arguments, launch, load
 
 LAUNCH = Path(__file__).resolve().parents[2] / 'ros2_ws/src/matrix_bringup/launch/full_graph.launch.py'
 FACTS = BagFacts(compressed=True, frames=5, has_ground_truth=True)
@@ -98,28 +98,33 @@ def test_ros_args_command_line():
     assert spec.label == 'D3/calib'
 
 
-# --- the launch file, against a stand-in of the launch API (tests/helpers/launch_stand_in.py) ----------
-def test_launch_file_starts_the_graph_nodes(monkeypatch, tmp_path):
+# --- the launch file, evaluated with the real launch API (tests/helpers/launch_files.py) -------------------
+def test_launch_file_starts_the_graph_nodes(tmp_path):
     from matrix_core.cli.main import main as cli
 
     sim = tmp_path / 'sim'
     assert cli(['simulate', '--config', 'simple', '--frames', '2', '--fast', '--bag', '--out', str(sim)]) == 0
-    assert launch_parameter_ok([1, 2.5]) and not any(map(launch_parameter_ok, ([], None, ['a', 1], {'a': 1})))
-    description = load_launch_file(monkeypatch, LAUNCH).generate_launch_description()
+    description = load(LAUNCH)
     declared = declared_arguments(description)
     fields = {name: (default, help_text) for name, _, default, help_text in settings_fields(GraphSettings)}
-    assert set(declared) == set(fields)
-    assert all(kw['description'] == fields[name][1] and kw['description'] for name, kw in declared.items())
+    assert set(declared) == set(fields) | {'exit_at_end'} and declared['exit_at_end'][0] == 'true'
+    assert all(text == fields[name][1] and text for name, (_, text) in declared.items() if name in fields)
 
     actions = launch(description, bag=str(sim / 'bag'), dataset=str(sim), views='D2,D4',
                      record=str(tmp_path / 'rec'), dds_profile='/etc/fastdds.xml')
-    assert type(actions[0]).__name__ == 'SetEnvironmentVariable'
-    assert actions[0].args == ('FASTRTPS_DEFAULT_PROFILES_FILE', '/etc/fastdds.xml')
-    launched = [a.kwargs for a in actions[1:]]
+    assert isinstance(actions[0], SetEnvironmentVariable)
+    assert [s.text for s in actions[0].name] == ['FASTRTPS_DEFAULT_PROFILES_FILE']
+    assert [s.text for s in actions[0].value] == ['/etc/fastdds.xml']
+    launched = [a for a in actions if not isinstance(a, (SetEnvironmentVariable, RegisterEventHandler))]
     expected = graph_nodes(GraphSettings(bag=str(sim / 'bag'), dataset=str(sim), views=['D2', 'D4'],
                                          record=str(tmp_path / 'rec'), dds_profile='/etc/fastdds.xml'))
-    assert [(k['package'], k['executable'], k['name'], k['namespace']) for k in launched] == \
-        [(n.package, n.executable, n.name, n.namespace or None) for n in expected]
-    assert [k['parameters'] for k in launched] == [[*n.param_files, n.parameters] for n in expected]
-    calib = launched[0]['parameters'][-1]
+    assert [(n.package, n.executable, n.name, n.namespace) for n in launched] == \
+        [(n.package, n.executable, n.name, n.namespace) for n in expected]
+    assert [n.parameters for n in launched] == [[*n.param_files, n.parameters] for n in expected]
+    calib = launched[0].parameters[-1]
     assert calib['config'].endswith('sim_simple.yaml') and calib['compressed'] is False   # from the dataset and bag
+    # the replay ends by itself: one exit handler per process, registered before the processes start
+    handlers = [a for a in actions if isinstance(a, RegisterEventHandler)]
+    assert len(handlers) == len(expected) and actions.index(handlers[-1]) < actions.index(launched[0])
+    assert not any(isinstance(a, RegisterEventHandler) for a in launch(
+        description, bag=str(sim / 'bag'), dataset=str(sim), views='D2,D4', exit_at_end='false'))

@@ -25,7 +25,7 @@ from std_msgs.msg import Header
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
 
-from matrix_bev_tracker.settings import FuseNodeSettings
+from matrix_bev_tracker.settings import LIVE_PARAMETERS, FuseNodeSettings
 from matrix_core import topics
 from matrix_core.fusion.fuser import BevFuser
 from matrix_core.fusion.view_inputs import ViewInputs
@@ -40,7 +40,7 @@ from matrix_ros.qos import publisher_qos, qos_by_name
 class FuseNode(Node):
     def __init__(self, defaults: FuseNodeSettings):
         super().__init__('fuse')
-        self.settings = s = declare_settings(self, FuseNodeSettings, defaults)
+        self.settings = s = declare_settings(self, FuseNodeSettings, defaults, live=LIVE_PARAMETERS)
         self.fuser = BevFuser(s)
         self.inputs = ViewInputs(self.fuser.input_size, s.min_confidence, s.jpeg_reduced_decode)
         self.frames_published = 0

@@ -22,3 +22,8 @@ class FuseNodeSettings(NodeSettings, FuseSettings):
         'help': 'decode JPEG images directly at 1/2, 1/4 or 1/8 size when that still covers the network input '
                 '(1920x1080 -> 960x540 for 480x272): about 0.1 s less per frame of 8 views; pixels differ from a '
                 'full decode + resize by < 1 grey level'})
+
+
+# What `ros2 param set /fuse NAME VALUE` may change while the node runs (the node reads them each frame);
+# the others are read-only: they shape the network, the tracker or the subscriptions, fixed at start.
+LIVE_PARAMETERS = ('tracker_reset_gap_s', 'world_frame')

@@ -5,8 +5,9 @@ One argument per field (same name, default and help as the ROS parameter and the
 the strings are parsed and validated by the dataclass itself (:func:`settings_from_launch`), so a bad value
 fails before any process starts, and the node gets typed parameters.
 
-The ``launch`` packages are imported inside the functions: this module is imported only by launch files,
-and the tests run them against a stand-in of the launch API (tests/helpers/launch_stand_in.py).
+The ``launch`` packages are imported inside the functions: this module is imported only by launch files
+(``launch`` comes with a ROS install, or scripts/build_cli.sh builds it here), and the rest of
+``matrix_ros`` stays importable without it.
 """
 
 from matrix_core.settings import setting_to_string, settings_fields, settings_from_strings

@@ -2,12 +2,13 @@
 :mod:`matrix_core.settings`), and the standard ``main`` of a node that takes both."""
 
 import argparse
+import dataclasses
 import signal
 import sys
 import typing
 
 import rclpy
-from rcl_interfaces.msg import ParameterDescriptor, ParameterType
+from rcl_interfaces.msg import ParameterDescriptor, ParameterType, SetParametersResult
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
@@ -30,18 +31,21 @@ def _type_key(typ):
     return typ
 
 
-def declare_settings(node, cls, defaults=None):
+def declare_settings(node, cls, defaults=None, live=()):
     """Declare one parameter per field of ``cls`` on ``node`` and return the filled dataclass.
 
     ``defaults`` (an instance of ``cls``, e.g. from CLI flags) replaces the dataclass defaults; values
     given with ``--ros-args -p name:=value`` or a YAML file win over both. The dataclass validates.
+    ``live`` names the parameters that may change while the node runs (``ros2 param set``): a new value
+    replaces ``node.settings`` by a validated copy (the node reads them from there each time); every other
+    parameter is read-only, so that setting it fails with a reason instead of silently doing nothing.
     """
     values = {}
     for name, typ, default, help_text in settings_fields(cls):
         if defaults is not None:
             default = getattr(defaults, name)
         param_type = _PARAM_TYPES[_type_key(typ)]
-        descriptor = ParameterDescriptor(description=help_text, type=param_type)
+        descriptor = ParameterDescriptor(description=help_text, type=param_type, read_only=name not in live)
         if isinstance(default, (list, tuple)) and not default:
             # rclpy cannot infer an array type from an empty list: declare the type, unset means empty.
             param = node.declare_parameter(name, Parameter.Type(param_type), descriptor)
@@ -50,7 +54,23 @@ def declare_settings(node, cls, defaults=None):
             param = node.declare_parameter(name, list(default) if isinstance(default, tuple) else default,
                                            descriptor)
             values[name] = list(param.value) if isinstance(default, (list, tuple)) else param.value
+    if live:
+        node.add_on_set_parameters_callback(lambda params: _set_live(node, params, live))
     return cls(**values)
+
+
+def _set_live(node, params, live) -> SetParametersResult:
+    """Validate the new values of ``live`` parameters with the settings dataclass, then apply them."""
+    changes = {p.name: p.value for p in params if p.name in live}
+    if not changes:
+        return SetParametersResult(successful=True)
+    try:
+        settings = dataclasses.replace(node.settings, **changes)
+    except (TypeError, ValueError) as exc:
+        return SetParametersResult(successful=False, reason=str(exc))
+    node.settings = settings
+    node.get_logger().info('parameters changed: ' + ', '.join(f'{k}={v!r}' for k, v in changes.items()))
+    return SetParametersResult(successful=True)
 
 
 def parse_node_args(cls, argv=None, description: str = ''):
