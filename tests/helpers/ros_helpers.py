@@ -11,6 +11,7 @@ exists somewhere in the graph.
 """
 
 import os
+import signal
 import subprocess
 import time
 from typing import Callable, Iterable
@@ -24,6 +25,32 @@ def start_node(executable, *params: str, env: dict = None) -> subprocess.Popen:
     args = [str(executable), '--ros-args', *[a for p in params for a in ('-p', p)]]
     return subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             env=None if env is None else {**os.environ, **env})
+
+
+def ros2(*args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess:
+    """Run the ``ros2`` command line to completion (``scripts/env.sh`` puts it on PATH: a ROS install's, or
+    the one scripts/build_cli.sh built); stdout and stderr together as text in ``.stdout``."""
+    return subprocess.run(['ros2', *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                          timeout=timeout_s)
+
+
+def ros2_graph(verb: str, *args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess:
+    """``ros2 VERB SUBVERB ARGS...`` for the verbs that look at the graph (node, param, topic, service), with
+    no ros2 daemon (a test leaves none behind). Without the daemon the CLI discovers the graph itself within
+    ``--spin-time`` seconds, all of which it waits: tried with 2 s, and again with longer on a loaded
+    machine while it says a node was not found."""
+    for spin_s in (2, 5, 15):
+        run = ros2(verb, *args[:1], '--no-daemon', '--spin-time', str(spin_s), *args[1:], timeout_s=timeout_s)
+        if 'not found' not in run.stdout.lower():
+            break
+    return run
+
+
+def start_ros2(*args: str) -> subprocess.Popen:
+    """Start ``ros2 ARGS...`` (``ros2 run``, ``ros2 launch``, ``ros2 topic echo``) in its own process group,
+    so that :func:`stop` reaches everything it started; output collected as text."""
+    return subprocess.Popen(['ros2', *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            start_new_session=True)
 
 
 def finish(process: subprocess.Popen, timeout_s: float = 20.0) -> str:
@@ -40,6 +67,29 @@ def stop(process: subprocess.Popen, timeout_s: float = 20.0) -> str:
     if process.poll() is None:
         process.terminate()
     return finish(process, timeout_s)
+
+
+def interrupt(process: subprocess.Popen, timeout_s: float = 30.0) -> str:
+    """Ctrl-C as in a terminal, for a process of :func:`start_ros2`: SIGINT to its whole process group (``ros2
+    run`` does not pass SIGTERM on to the node it started); the group is killed if it has not exited within
+    ``timeout_s``. Returns the output."""
+    if process.poll() is None:
+        os.killpg(process.pid, signal.SIGINT)
+    try:
+        return process.communicate(timeout=timeout_s)[0]
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)
+        return process.communicate()[0] + '\n[killed: did not exit on SIGINT]'
+
+
+def interrupt_all(processes: Iterable[subprocess.Popen], timeout_s: float = 30.0) -> list:
+    """:func:`interrupt` for every process of :func:`start_ros2`: SIGINT to all first (they shut down
+    together), then each one's output, in order."""
+    processes = list(processes)
+    for p in processes:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGINT)
+    return [interrupt(p, timeout_s) for p in processes]
 
 
 def stop_all(processes: Iterable[subprocess.Popen], timeout_s: float = 20.0) -> list:

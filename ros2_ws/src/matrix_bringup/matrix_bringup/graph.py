@@ -148,6 +148,11 @@ class BagFacts:
         if not (Path(bag) / 'metadata.yaml').is_file():
             raise FileNotFoundError(f'not a rosbag2 folder (no metadata.yaml): {bag!r}')
         topics = bag_topics(bag)
+        imaged = {t.split('/')[1] for t in topics if t.endswith(('/image_raw', '/image/compressed'))}
+        unknown = [v for v in views if v not in imaged]
+        if unknown:
+            raise ValueError(f'{bag}: no images of view(s) {", ".join(unknown)} in this bag; '
+                             f'it has images of {", ".join(sorted(imaged)) or "no view"}')
         raw = [topics[t][1] for v in views if (t := f'/{v}/image_raw') in topics]
         compressed = [topics[t][1] for v in views if (t := f'/{v}/image/compressed') in topics]
         if len(raw) + len(compressed) != len(views) or (raw and compressed):
