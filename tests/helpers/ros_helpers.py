@@ -38,10 +38,10 @@ def ros2_graph(verb: str, *args: str, timeout_s: float = 120.0) -> subprocess.Co
     """``ros2 VERB SUBVERB ARGS...`` for the verbs that look at the graph (node, param, topic, service), with
     no ros2 daemon (a test leaves none behind). Without the daemon the CLI discovers the graph itself within
     ``--spin-time`` seconds, all of which it waits: tried with 2 s, and again with longer on a loaded
-    machine while it says a node was not found."""
+    machine while it prints nothing or says a node was not found."""
     for spin_s in (2, 5, 15):
         run = ros2(verb, *args[:1], '--no-daemon', '--spin-time', str(spin_s), *args[1:], timeout_s=timeout_s)
-        if 'not found' not in run.stdout.lower():
+        if run.stdout.strip() and 'not found' not in run.stdout.lower():
             break
     return run
 
@@ -58,8 +58,20 @@ def finish(process: subprocess.Popen, timeout_s: float = 20.0) -> str:
     try:
         return process.communicate(timeout=timeout_s)[0]
     except subprocess.TimeoutExpired:
-        process.kill()
+        _kill(process)
         return process.communicate()[0] + '\n[killed: did not exit]'
+
+
+def _kill(process: subprocess.Popen) -> None:
+    """SIGKILL to the process, and to its group if it leads one (:func:`start_ros2`: ``ros2 run`` leaves its
+    node running when it is killed, and the node holds the output pipe open)."""
+    try:
+        if os.getpgid(process.pid) == process.pid:
+            os.killpg(process.pid, signal.SIGKILL)
+            return
+    except ProcessLookupError:
+        return
+    process.kill()
 
 
 def stop(process: subprocess.Popen, timeout_s: float = 20.0) -> str:
@@ -78,7 +90,7 @@ def interrupt(process: subprocess.Popen, timeout_s: float = 30.0) -> str:
     try:
         return process.communicate(timeout=timeout_s)[0]
     except subprocess.TimeoutExpired:
-        os.killpg(process.pid, signal.SIGKILL)
+        _kill(process)
         return process.communicate()[0] + '\n[killed: did not exit on SIGINT]'
 
 
