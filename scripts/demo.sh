@@ -6,24 +6,40 @@
 # For each: calibration/registration errors (monitor), detection/tracking metrics of the live recording
 # against the bag's ground truth, a picture of the tracks; for the simulated sequence also the same
 # checkpoint offline on the same registration homographies (live and offline must agree).
-# Run inside scripts/env.sh (the Makefile does). On a full ROS 2 install the same graph is
+# Run inside scripts/env.sh (the Makefile does). The graph runs as users run it,
 #   ros2 launch matrix_bringup full_graph.launch.py bag:=BAG dataset:=DIR record:=... monitor:=true
+# (a ROS install's ros2, or the one `make setup` builds here); without a ros2 command, through run_graph.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SAMPLE=${SAMPLE:-$MATRIX_SHARED/matrix_sample}
 OUT=${OUT:-out/demo}
 FRAMES=${DEMO_FRAMES:-12}
 CHECKPOINTS=ros2_ws/src/matrix_core/matrix_core/bev/checkpoints
-RUN_GRAPH=ros2_ws/install/matrix_bringup/lib/matrix_bringup/run_graph   # what `ros2 run matrix_bringup run_graph` starts
+RUN_GRAPH=ros2_ws/install/matrix_bringup/lib/matrix_bringup/run_graph   # where there is no ros2 command
 [ -d "$SAMPLE" ] || { echo "demo: MATRIX sample not found at $SAMPLE (set SAMPLE=...)" >&2; exit 1; }
 mkdir -p "$OUT"
 
-live_graph() {  # live_graph NAME BAG DATASET [run_graph flags...]: the graph, then the scores of what it published
+live_graph() {  # live_graph NAME BAG DATASET [ARG:=VALUE...]: the graph, then the scores of what it published
   local name=$1 bag=$2 dataset=$3; shift 3
   rm -rf "${OUT:?}/$name"
-  echo "== $name: live graph (ROS_DOMAIN_ID=$ROS_DOMAIN_ID): run_graph --bag $bag --dataset $dataset $*"
-  "$RUN_GRAPH" --bag "$bag" --dataset "$dataset" --drones_per_process 4 --monitor --monitor_out "$OUT/$name" \
-    --record "$OUT/$name/recording" --log_dir "$OUT/$name/logs" "$@"
+  mkdir -p "$OUT/$name/logs"
+  local args=(bag:="$bag" dataset:="$dataset" drones_per_process:=4 monitor:=true monitor_out:="$OUT/$name"
+              record:="$OUT/$name/recording" "$@")
+  if command -v ros2 >/dev/null 2>&1; then   # the path users take; it ends by itself after the bag
+    echo "== $name: live graph (ROS_DOMAIN_ID=$ROS_DOMAIN_ID): ros2 launch matrix_bringup full_graph.launch.py ${args[*]}"
+    if ! ROS_LOG_DIR="$OUT/$name/logs" ros2 launch matrix_bringup full_graph.launch.py "${args[@]}" \
+        > "$OUT/$name/logs/launch.log" 2>&1; then
+      tail -n 40 "$OUT/$name/logs/launch.log" >&2
+      echo "demo: ros2 launch failed (all of its output: $OUT/$name/logs/launch.log)" >&2
+      return 1
+    fi
+    grep -o "replay done: .*" "$OUT/$name/logs/launch.log" | sed 's/^/launch: /'
+  else   # no ros2 CLI: the same processes through run_graph, flags of the same names
+    local flags=() arg
+    for arg in "${args[@]}"; do flags+=("--${arg%%:=*}" "${arg#*:=}"); done
+    echo "== $name: live graph (ROS_DOMAIN_ID=$ROS_DOMAIN_ID): run_graph ${flags[*]}"
+    "$RUN_GRAPH" "${flags[@]}" --log_dir "$OUT/$name/logs"
+  fi
   echo "-- $name: calibration (calib) and registration (register) published live, against the ground truth"
   cat "$OUT/$name/graph_summary.txt"
   echo "-- $name: detections and tracks published live (fuse), against the bag's ground truth"
@@ -47,7 +63,7 @@ rm -rf "$SIM"
 matrix-tracker simulate --config complex --frames "$FRAMES" --seed 7 --image_ext .jpg --bag --compressed --out "$SIM"
 matrix-tracker info "$SIM" | grep -E "^(format|views|frames|people|camera_height_m)"
 # complex.pt: trained on simulated sequences (it does not transfer to real images; complex_quick.pt does)
-live_graph simulated "$SIM/bag" "$SIM" --checkpoint "$CHECKPOINTS/complex.pt"
+live_graph simulated "$SIM/bag" "$SIM" checkpoint:="$CHECKPOINTS/complex.pt"
 
 echo "== simulated: the same checkpoint offline on the same frames, with the registration homographies"
 matrix-tracker register "$SIM" --out "$OUT/simulated/offline_registration" > "$OUT/simulated/offline_register.log" 2>&1

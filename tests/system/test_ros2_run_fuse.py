@@ -1,9 +1,9 @@
-"""`ros2 run matrix_bev_tracker fuse --ros-args --params-file ...` as the README shows it, fed by `ros2 run
-matrix_ros bag_player`, with `ros2 topic echo /tracks` in another process as "the other robotics stack",
-then `ros2 param get/set` on the running node: the live parameters change, the others refuse with a reason."""
+"""`ros2 run` as the README shows it: `fuse --ros-args --params-file ...` fed by `ros2 run matrix_ros
+bag_player`, with `ros2 topic echo /tracks` in another process as "the other robotics stack", then `ros2 param
+get/set` on the running node (the live parameters change, the others refuse with a reason); and
+`ros2 run matrix_ros dataset_player` on the real sample."""
 
 import pytest
-from ament_index_python.packages import get_package_share_directory
 
 import ros_helpers
 from matrix_bringup.graph import BagFacts
@@ -16,7 +16,8 @@ VIEWS = ['D1', 'D2']
 def test_fuse_started_with_ros2_run_feeds_another_process_and_takes_live_parameters(tmp_path):
     sim = tmp_path / 'sim'
     assert cli(['simulate', '--config', 'simple', '--frames', '2', '--fast', '--bag', '--out', str(sim)]) == 0
-    params = f'{get_package_share_directory("matrix_bev_tracker")}/config/fuse.yaml'
+    prefix = ros_helpers.ros2('pkg', 'prefix', 'matrix_bev_tracker').stdout.strip()
+    params = f'{prefix}/share/matrix_bev_tracker/config/fuse.yaml'
     # geometry: the bag's ground-truth CameraInfo (no calib or register needed to feed fuse)
     fuse = ros_helpers.start_ros2('run', 'matrix_bev_tracker', 'fuse', '--ros-args', '--params-file', params,
                                   '-p', f'views:=[{",".join(VIEWS)}]', '-p', 'input_kind:=camera_info',
@@ -55,3 +56,15 @@ def test_fuse_started_with_ros2_run_feeds_another_process_and_takes_live_paramet
         fused, *_ = ros_helpers.interrupt_all([fuse, echo, player])
     assert 'published 2 frames' in fused and 'parameters changed: tracker_reset_gap_s=2.5' in fused, fused[-3000:]
     assert 'Traceback' not in fused, fused[-3000:]
+
+
+def test_dataset_player_started_with_ros2_run(matrix_sample):
+    player = ros_helpers.start_ros2('run', 'matrix_ros', 'dataset_player', '--ros-args', '-p',
+                                    f'dataset:={matrix_sample}', '-p', 'views:=[D1]', '-p', 'loop:=true')
+    try:
+        echo = ros_helpers.ros2('topic', 'echo', '--no-daemon', '--once', '--qos-durability', 'transient_local',
+                                '/D1/ground_truth/camera_info', 'sensor_msgs/msg/CameraInfo', timeout_s=120)
+        assert echo.returncode == 0 and 'width: 1920' in echo.stdout, echo.stdout[-3000:]
+    finally:
+        output = ros_helpers.interrupt(player)
+    assert 'Traceback' not in output, output[-3000:]

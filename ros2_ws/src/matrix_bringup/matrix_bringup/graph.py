@@ -1,9 +1,9 @@
 """The live graph as data: which nodes run, with which parameters, to replay one sequence bag.
 
 Both ways of starting the graph build their processes from :func:`graph_nodes`: ``launch/full_graph.launch.py``
-on a full ROS 2 install (``ros2 launch``), and ``run_graph`` in this repository's pip environment, which
-has no ``launch`` package and starts the same executables from ``install/``. Pure Python (no rclpy, no
-launch), so the graph itself is tested with plain pytest.
+(``ros2 launch``: a ROS 2 install's, or the one ``make setup`` builds here), and ``run_graph`` where there is
+no ``ros2 launch``, which starts the same executables from ``install/``. Pure Python (no rclpy, no launch),
+so the graph itself is tested with plain pytest.
 
     bag_player --images--> register (per drone) --homography--> fuse --tracks--> recorder, [graph_monitor]
                --images--> calib (per drone) <--homography--+ (calib_registration)
