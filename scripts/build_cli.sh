@@ -27,5 +27,5 @@ mkdir -p "$OVERLAY"
 cd "$OVERLAY"
 colcon --log-base log build --base-paths "$SRC" --build-base build --install-base install \
   --cmake-args -DBUILD_TESTING=OFF \
-  --event-handlers console_direct- console_cohesion- summary+ status- 2>&1 | grep -v "had stderr output" | tail -n 5
+  --event-handlers console_direct- console_cohesion- console_stderr- summary+ status- 2>&1 | grep -v "had stderr output" | tail -n 3
 test -f install/ros2cli/bin/ros2
