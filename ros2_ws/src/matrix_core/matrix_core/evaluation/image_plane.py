@@ -1,0 +1,83 @@
+"""Scoring the image-plane output (2D boxes with fused ids per drone) against a dataset's annotated boxes.
+
+The tracks of a frame become boxes in each drone with :func:`matrix_core.fusion.image_boxes.image_boxes`
+and that frame's camera of the drone; the annotated boxes are the dataset's ``PersonAnnotation.boxes``
+(person ids), clipped to the image like the predictions. Metrics: :mod:`matrix_core.metrics.image_boxes`.
+"""
+
+import numpy as np
+
+from matrix_core.fusion.image_boxes import ImageBoxSettings, clip_box, image_boxes, obstacles_from_meta
+from matrix_core.metrics.image_boxes import FrameBoxes
+
+
+def scene_box_settings(dataset, settings: ImageBoxSettings = None) -> ImageBoxSettings:
+    """``settings`` with the dataset's own obstacle boxes when its meta states them (simulated folders)."""
+    from dataclasses import replace
+
+    s = settings or ImageBoxSettings()
+    return replace(s, obstacle_boxes=obstacles_from_meta(getattr(dataset, 'meta', None), s.obstacle_boxes))
+
+
+def annotated_boxes(dataset, frames, views, frame_numbers=None) -> FrameBoxes:
+    """Annotated boxes of ``frames`` (dataset frame numbers) in ``views``, clipped to the image; the output
+    frame of ``frames[k]`` is ``frame_numbers[k]`` (default: the dataset frame itself)."""
+    w, h = dataset.image_size
+    rows = ([], [], [], [])
+    for k, f in enumerate(frames):
+        for person in dataset.annotations(f):
+            for v, b in person.boxes.items():
+                if v in views:
+                    for col, val in zip(rows, ((frame_numbers or frames)[k], v, person.person_id,
+                                               clip_box([b.xmin, b.ymin, b.xmax, b.ymax], w, h))):
+                        col.append(val)
+    return FrameBoxes(rows[0], rows[1], rows[2], np.reshape(rows[3], (-1, 4)))
+
+
+def predicted_boxes(tracks, camera_of, views, settings: ImageBoxSettings) -> FrameBoxes:
+    """Boxes of ``tracks`` (BevPoints with ids and scores) in every view: ``camera_of(view, frame)`` gives the
+    frame's Camera (None: the view has no camera that frame, no boxes)."""
+    parts = []
+    for f, rows in tracks.by_frame().items():
+        for v in views:
+            camera = camera_of(v, f)
+            if camera is None:
+                continue
+            found = image_boxes(camera, tracks.ids[rows], tracks.xy[rows], tracks.scores[rows], settings)
+            if found:
+                parts.append(FrameBoxes([f] * len(found), [v] * len(found), [b.track_id for b in found],
+                                        np.array([b.box for b in found]), [b.score for b in found]))
+    return FrameBoxes.concatenate(parts)
+
+
+def draw_frame_png(path, images: dict, pred: FrameBoxes, gt: FrameBoxes, frame: int, title: str = '') -> None:
+    """A mosaic (4 columns) of every drone's image of ``frame`` (view -> BGR image) with the annotated boxes
+    (thin white) and the predicted boxes with their ids (colour per id)."""
+    import cv2
+
+    tiles = []
+    for v, image in images.items():
+        img = image.copy()
+        for b in gt.boxes[(gt.frames == frame) & (gt.views == v)]:
+            cv2.rectangle(img, tuple(int(round(c)) for c in b[:2]), tuple(int(round(c)) for c in b[2:]),
+                          (255, 255, 255), 2)
+        sel = (pred.frames == frame) & (pred.views == v)
+        for i, b in zip(pred.ids[sel], pred.boxes[sel]):
+            hue = int((i * 0.618034) % 1.0 * 179)
+            colour = tuple(int(c) for c in cv2.cvtColor(np.uint8([[[hue, 255, 255]]]), cv2.COLOR_HSV2BGR)[0, 0])
+            p0, p1 = tuple(int(round(c)) for c in b[:2]), tuple(int(round(c)) for c in b[2:])
+            cv2.rectangle(img, p0, p1, colour, 4)
+            cv2.putText(img, str(int(i)), (p0[0], max(p0[1] - 8, 30)), cv2.FONT_HERSHEY_SIMPLEX, 1.4, colour, 4)
+        cv2.putText(img, f'{v} frame {frame}', (20, 60), cv2.FONT_HERSHEY_SIMPLEX, 2.0, (0, 255, 255), 5)
+        tiles.append(cv2.resize(img, (img.shape[1] // 3, img.shape[0] // 3), interpolation=cv2.INTER_AREA))
+    if not tiles:
+        return
+    cols = min(4, len(tiles))
+    blank = np.zeros_like(tiles[0])
+    tiles += [blank] * (-len(tiles) % cols)
+    mosaic = np.vstack([np.hstack(tiles[r:r + cols]) for r in range(0, len(tiles), cols)])
+    if title:
+        bar = np.zeros((50, mosaic.shape[1], 3), np.uint8)
+        cv2.putText(bar, title, (10, 35), cv2.FONT_HERSHEY_SIMPLEX, 1.0, (255, 255, 255), 2)
+        mosaic = np.vstack([bar, mosaic])
+    cv2.imwrite(str(path), mosaic)
