@@ -41,3 +41,10 @@ def test_mot_text_round_trip(tmp_path):
     back = read_mot_boxes(tmp_path / 'b.txt')
     np.testing.assert_allclose(back.boxes, [[0, 0, 5, 5], [1.5, 2, 11, 22]])
     assert back.views.tolist() == ['D1', 'D2'] and back.ids.tolist() == [6, 5]
+
+
+def test_rows_by_frame_keys_each_group_by_its_own_frame():
+    from matrix_core.metrics import BevPoints
+
+    groups = BevPoints([1, 0, 1, 2], np.zeros((4, 2))).by_frame()
+    assert {f: g.tolist() for f, g in groups.items()} == {0: [1], 1: [0, 2], 2: [3]}

@@ -5,10 +5,25 @@ and that frame's camera of the drone; the annotated boxes are the dataset's ``Pe
 (person ids), clipped to the image like the predictions. Metrics: :mod:`matrix_core.metrics.image_boxes`.
 """
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from matrix_core.fusion.image_boxes import ImageBoxSettings, clip_box, image_boxes, obstacles_from_meta
-from matrix_core.metrics.image_boxes import FrameBoxes
+from matrix_core.fusion.image_boxes import (ImageBoxSettings, camera_from_ground_homography, clip_box, image_boxes,
+                                            obstacles_from_meta)
+from matrix_core.metrics.image_boxes import FrameBoxes, per_view_metrics
+
+
+@dataclass
+class ImagePlaneScores:
+    """Predicted and annotated boxes, and ``metrics``: drone -> TrackingMetrics, plus ``'all'``."""
+
+    pred: FrameBoxes
+    gt: FrameBoxes
+    metrics: dict
+
+    def as_dict(self) -> dict:
+        return {v: m.as_dict() for v, m in self.metrics.items()}
 
 
 def scene_box_settings(dataset, settings: ImageBoxSettings = None) -> ImageBoxSettings:
@@ -17,6 +32,34 @@ def scene_box_settings(dataset, settings: ImageBoxSettings = None) -> ImageBoxSe
 
     s = settings or ImageBoxSettings()
     return replace(s, obstacle_boxes=obstacles_from_meta(getattr(dataset, 'meta', None), s.obstacle_boxes))
+
+
+def reference_intrinsics(dataset, view: str, frame: int) -> np.ndarray:
+    """(3, 3) K of ``view``: its reference calibration's when the dataset has one (what the live graph's
+    fuse node knows), else that frame's calibration's."""
+    if getattr(dataset, 'has_reference', False):
+        return dataset.reference_camera(view).K
+    return dataset.camera(view, frame).K
+
+
+def homography_cameras(dataset, homography_of):
+    """``camera_of(view, frame)``: the camera implied by ``homography_of``'s (img_H_ground, (w, h))
+    (``bev.calibration_sources``) with the view's :func:`reference_intrinsics`; None where it has none."""
+    def camera_of(view, frame):
+        h = homography_of(view, frame)
+        return None if h is None else camera_from_ground_homography(h[0], reference_intrinsics(dataset, view, frame),
+                                                                    h[1])
+    return camera_of
+
+
+def score_image_plane(dataset, tracks, camera_of, views, frames, settings: ImageBoxSettings = None,
+                      iou_threshold: float = 0.5, frame_numbers=None) -> ImagePlaneScores:
+    """Boxes of ``tracks`` (BevPoints, frames numbered like ``frame_numbers``, default the dataset frames
+    ``frames``) against the annotated boxes of ``frames`` in ``views``; the dataset's obstacles."""
+    settings = scene_box_settings(dataset, settings)
+    pred = predicted_boxes(tracks, camera_of, views, settings)
+    gt = annotated_boxes(dataset, frames, views, frame_numbers)
+    return ImagePlaneScores(pred, gt, per_view_metrics(gt, pred, iou_threshold))
 
 
 def annotated_boxes(dataset, frames, views, frame_numbers=None) -> FrameBoxes:

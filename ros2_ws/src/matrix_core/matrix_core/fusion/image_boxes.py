@@ -80,6 +80,13 @@ def implied_view_camera(implied, size: tuple) -> Camera:
     return Camera(implied.K, pose_matrix(implied.R, implied.t), int(size[0]), int(size[1]))
 
 
+def camera_from_ground_homography(img_H_ground, K, size: tuple) -> Camera:
+    """The camera a (3, 3) ground -> pixel homography implies with intrinsics ``K`` (3, 3), image (w, h)."""
+    from matrix_core.geometry.homography import implied_camera
+
+    return implied_view_camera(implied_camera(np.asarray(K, dtype=np.float64), img_H_ground), size)
+
+
 def cylinder_outline(xy, radius: float, height: float) -> np.ndarray:
     """(N, 2 * OUTLINE_POINTS, 3) world points of the base and top circles of cylinders at (N, 2) ``xy``."""
     a = np.linspace(0.0, 2 * np.pi, OUTLINE_POINTS, endpoint=False)
