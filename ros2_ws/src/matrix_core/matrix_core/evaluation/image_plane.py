@@ -9,8 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from matrix_core.fusion.image_boxes import (ImageBoxSettings, camera_from_ground_homography, clip_box, image_boxes,
-                                            obstacles_from_meta)
+from matrix_core.fusion.image_boxes import (ImageBoxSettings, camera_from_ground_homography, clip_box,
+                                            draw_image_boxes, image_boxes, obstacles_from_meta)
 from matrix_core.metrics.image_boxes import FrameBoxes, per_view_metrics
 
 
@@ -62,6 +62,37 @@ def score_image_plane(dataset, tracks, camera_of, views, frames, settings: Image
     return ImagePlaneScores(pred, gt, per_view_metrics(gt, pred, iou_threshold))
 
 
+def read_recorded_boxes(path, clock) -> FrameBoxes:
+    """Every ``<view>/detections_2d`` (matrix_msgs/Detection2DArray) of a recorder bag; frames by ``clock``
+    (the sequence clock); the view is the topic's drone ('/D3/detections_2d' -> 'D3')."""
+    from pathlib import Path
+
+    from rosbags.highlevel import AnyReader
+
+    from matrix_core import topics
+    from matrix_core.bags.messages import stamp_ns
+
+    rows = ([], [], [], [], [])
+    with AnyReader([Path(path)]) as reader:
+        conns = [c for c in reader.connections if c.msgtype == topics.DETECTION_2D_ARRAY_TYPE
+                 and c.topic.endswith('/' + topics.DETECTIONS_2D)]
+        for conn, _, raw in reader.messages(connections=conns):
+            msg = reader.deserialize(raw, conn.msgtype)
+            frame, view = clock.frame_ns(stamp_ns(msg.header)), conn.topic.split('/')[-2]
+            for d in msg.detections:
+                for col, val in zip(rows, (frame, view, d.id, (d.x_min, d.y_min, d.x_max, d.y_max), d.score)):
+                    col.append(val)
+    return FrameBoxes(rows[0], rows[1], rows[2], np.reshape(rows[3], (-1, 4)), rows[4])
+
+
+def ids_in_tracks(boxes: FrameBoxes, tracks) -> float:
+    """Fraction of ``boxes`` whose id is a track id of the same frame in ``tracks`` (BevPoints with ids):
+    1.0 when every drone's identities are the BEV track ids (NaN without boxes)."""
+    known = set(zip(tracks.frames.tolist(), tracks.ids.tolist()))
+    hits = [(int(f), int(i)) in known for f, i in zip(boxes.frames, boxes.ids)]
+    return float(np.mean(hits)) if hits else float('nan')
+
+
 def annotated_boxes(dataset, frames, views, frame_numbers=None) -> FrameBoxes:
     """Annotated boxes of ``frames`` (dataset frame numbers) in ``views``, clipped to the image; the output
     frame of ``frames[k]`` is ``frame_numbers[k]`` (default: the dataset frame itself)."""
@@ -105,12 +136,7 @@ def draw_frame_png(path, images: dict, pred: FrameBoxes, gt: FrameBoxes, frame: 
             cv2.rectangle(img, tuple(int(round(c)) for c in b[:2]), tuple(int(round(c)) for c in b[2:]),
                           (255, 255, 255), 2)
         sel = (pred.frames == frame) & (pred.views == v)
-        for i, b in zip(pred.ids[sel], pred.boxes[sel]):
-            hue = int((i * 0.618034) % 1.0 * 179)
-            colour = tuple(int(c) for c in cv2.cvtColor(np.uint8([[[hue, 255, 255]]]), cv2.COLOR_HSV2BGR)[0, 0])
-            p0, p1 = tuple(int(round(c)) for c in b[:2]), tuple(int(round(c)) for c in b[2:])
-            cv2.rectangle(img, p0, p1, colour, 4)
-            cv2.putText(img, str(int(i)), (p0[0], max(p0[1] - 8, 30)), cv2.FONT_HERSHEY_SIMPLEX, 1.4, colour, 4)
+        img = draw_image_boxes(img, pred.boxes[sel], pred.ids[sel])
         cv2.putText(img, f'{v} frame {frame}', (20, 60), cv2.FONT_HERSHEY_SIMPLEX, 2.0, (0, 255, 255), 5)
         tiles.append(cv2.resize(img, (img.shape[1] // 3, img.shape[0] // 3), interpolation=cv2.INTER_AREA))
     if not tiles:

@@ -52,6 +52,8 @@ class ImageBoxSettings:
         if not (0.0 < self.person_occlusion <= 1.0 and 0.0 < self.min_in_image <= 1.0):
             raise ValueError('person_occlusion and min_in_image must be in (0, 1]')
         as_boxes(self.obstacle_boxes)
+        if hasattr(super(), '__post_init__'):   # settings composed with others (the fuse node's)
+            super().__post_init__()
 
 
 @dataclass(frozen=True)
@@ -164,3 +166,29 @@ def image_boxes(camera: Camera, track_ids, xy, scores, settings: ImageBoxSetting
         occluded = covered_fraction(boxes[k], boxes[order[:rank]]) > s.person_occlusion
         out.append(ImageBox(int(ids[idx[k]]), float(sc[idx[k]]), boxes[k], float(dist[k]), bool(occluded)))
     return out
+
+
+def id_colour(track_id: int) -> tuple:
+    """A distinct, stable BGR colour per id (golden-ratio hues, as the RViz markers)."""
+    import cv2
+
+    hue = int((int(track_id) * 0.618034) % 1.0 * 179)
+    return tuple(int(c) for c in cv2.cvtColor(np.uint8([[[hue, 255, 255]]]), cv2.COLOR_HSV2BGR)[0, 0])
+
+
+def draw_image_boxes(image: np.ndarray, boxes, ids, occluded=None, thickness: int = 4) -> np.ndarray:
+    """A copy of the (H, W, 3) BGR ``image`` with (N, 4) ``boxes`` and their ids drawn, a colour per id;
+    occluded boxes (N,) bool are drawn thin."""
+    import cv2
+
+    img = image.copy()
+    scale = max(img.shape[1] / 1920, 0.3)
+    boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+    for k, (i, b) in enumerate(zip(ids, boxes)):
+        colour = id_colour(i)
+        p0, p1 = tuple(int(round(c)) for c in b[:2]), tuple(int(round(c)) for c in b[2:])
+        thin = occluded is not None and occluded[k]
+        cv2.rectangle(img, p0, p1, colour, max(1, round((1 if thin else thickness) * scale)))
+        cv2.putText(img, str(int(i)), (p0[0], max(p0[1] - int(8 * scale), int(30 * scale))),
+                    cv2.FONT_HERSHEY_SIMPLEX, 1.4 * scale, colour, max(1, round(thickness * scale)))
+    return img
