@@ -21,8 +21,11 @@ def test_projection_of_a_known_point():
 
 def test_box_of_a_person_ahead_by_hand():
     (b,) = image_boxes(CAMERA, [7], [[10.0, 0.0]], [0.9], NO_OBSTACLES)
-    # u = 960 - 1000 y / x at the circle's sides (y = +-0.25, x = 10); v = 540 + 1000 (1 - z) / x at the near
-    # edge x = 9.75 for the feet (z = 0) and the head (z = 1.75)
+    # u = 960 - 1000 y / x at the circle's sides (y = +-0.25, x = 10); v = 540 + 1000 (1 - z) / x: the top at
+    # the near edge x = 9.75 of the head circle (z = 1.75), the bottom at the foot point (10, 0, 0)
+    np.testing.assert_allclose(b.box, [935.0, 540 - 750 / 9.75, 985.0, 640.0], atol=1e-6)
+    # bottom_at_foot off: the bottom of the outline, the near edge of the foot circle
+    (b,) = image_boxes(CAMERA, [7], [[10.0, 0.0]], [0.9], ImageBoxSettings(obstacle_boxes=[], bottom_at_foot=False))
     np.testing.assert_allclose(b.box, [935.0, 540 - 750 / 9.75, 985.0, 540 + 1000 / 9.75], atol=1e-6)
     assert (b.track_id, b.score, b.occluded) == (7, 0.9, False)
     assert b.distance_m == pytest.approx(np.hypot(10.0, 1.0))

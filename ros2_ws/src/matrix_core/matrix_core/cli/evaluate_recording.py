@@ -12,7 +12,8 @@ Image plane, with ``--dataset`` (the MATRIX folder the sequence bag was made fro
 ``i``-th frame): the recorded ``/Dn/detections_2d`` against the annotated boxes at IoU >= ``--iou``, per drone
 and overall (precision, recall, MOTA, IDF1; ``metrics.image_boxes``), and the share of 2D ids that are
 track ids of /tracks in the same frame; ``--boxes-2d`` writes them as ``frame,id,x,y,w,h,score,drone``,
-``--png-2d`` draws one frame of every drone.
+``--png-2d`` draws one frame of every drone, ``--overlays DIR`` writes the recorded overlay images
+(``/Dn/overlay/compressed``, when fuse published them) of that frame as ``DIR/overlay_Dn.png``.
 """
 
 import json
@@ -38,6 +39,7 @@ def add_parser(subparsers) -> None:
     p.add_argument('--iou', type=float, default=0.5, help='image-plane match threshold (default: 0.5)')
     p.add_argument('--boxes-2d', help='with --dataset: write the recorded 2D boxes to this text file')
     p.add_argument('--png-2d', help='with --dataset: draw the middle frame of every drone into this PNG')
+    p.add_argument('--overlays', help='with --dataset: write the recorded overlay images of that frame here')
     p.add_argument('--json', help='also write the metrics to this JSON file')
     p.add_argument('--png', help='also draw the tracks and the ground-truth trajectories into this PNG')
     p.set_defaults(func=run)
@@ -103,6 +105,8 @@ def _image_plane(args, clock, recording) -> dict:
         draw_frame_png(args.png_2d, {v: dataset.load_image(v, dataset.frames[k]) for v in dataset.views}, pred, gt, k,
                        f'live recording, frame {k}: detections_2d (id, colour) and annotated boxes (white)')
         print(f'wrote {args.png_2d}')
+    if args.overlays and frames:
+        _write_overlays(args, clock, frames[len(frames) // 2])
     return {'per_drone': {v: m.as_dict() for v, m in metrics.items()}, 'ids_in_tracks': same_ids,
             'iou': args.iou}
 
@@ -124,3 +128,16 @@ def _draw(path, result, area, name) -> None:
     save_trajectories_png(path, result.gt, tracks, BevGrid(*map(float, area)),
                           f'live recording {Path(name).name}: tracks vs ground truth')
     print(f'wrote {path}')
+
+
+def _write_overlays(args, clock, frame: int) -> None:
+    import cv2
+
+    from matrix_core.evaluation.image_plane import read_recorded_overlays
+
+    overlays = read_recorded_overlays(args.recording, clock, frame)
+    Path(args.overlays).mkdir(parents=True, exist_ok=True)
+    for view, image in overlays.items():
+        cv2.imwrite(str(Path(args.overlays) / f'overlay_{view}.png'), image)
+    print(f'wrote {len(overlays)} overlay images of frame {frame} to {args.overlays}/'
+          if overlays else f'no overlay images of frame {frame} in {args.recording} (fuse overlay off?)')

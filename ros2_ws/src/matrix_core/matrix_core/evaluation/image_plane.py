@@ -85,6 +85,26 @@ def read_recorded_boxes(path, clock) -> FrameBoxes:
     return FrameBoxes(rows[0], rows[1], rows[2], np.reshape(rows[3], (-1, 4)), rows[4])
 
 
+def read_recorded_overlays(path, clock, frame: int) -> dict:
+    """view -> (H, W, 3) BGR image of every ``<view>/overlay/compressed`` of a recorder bag at ``frame``."""
+    from pathlib import Path
+
+    from rosbags.highlevel import AnyReader
+
+    from matrix_core import topics
+    from matrix_core.bags.messages import stamp_ns
+    from matrix_core.message_fields import image_from_msg
+
+    images = {}
+    with AnyReader([Path(path)]) as reader:
+        conns = [c for c in reader.connections if c.topic.endswith('/' + topics.OVERLAY_COMPRESSED)]
+        for conn, _, raw in reader.messages(connections=conns):
+            msg = reader.deserialize(raw, conn.msgtype)
+            if clock.frame_ns(stamp_ns(msg.header)) == frame:
+                images[conn.topic.strip('/').split('/')[-3]] = image_from_msg(msg)
+    return dict(sorted(images.items()))
+
+
 def ids_in_tracks(boxes: FrameBoxes, tracks) -> float:
     """Fraction of ``boxes`` whose id is a track id of the same frame in ``tracks`` (BevPoints with ids):
     1.0 when every drone's identities are the BEV track ids (NaN without boxes)."""

@@ -2,7 +2,8 @@
 
 A track at ground position (x, y) is modelled as an upright cylinder standing on z = 0 (radius
 ``person_radius_m``, height ``person_height_m``). Its image box is the bounding box of the projected outline
-(two circles of ``OUTLINE_POINTS`` points, at the feet and at the head), clipped to the image.
+(two circles of ``OUTLINE_POINTS`` points, at the feet and at the head), down to the projected foot point
+(``bottom_at_foot``: how MATRIX and the simulator draw their annotation boxes), clipped to the image.
 
 Visibility rule (a track is REPORTED in a view when all hold):
     1. the whole cylinder is in front of the camera (every outline point has positive depth);
@@ -34,8 +35,14 @@ OUTLINE_POINTS = 16          # points per circle of the cylinder's outline
 class ImageBoxSettings:
     """The person model and the visibility rule of the image boxes (module docstring)."""
 
-    person_radius_m: float = field(default=0.25, metadata={'help': 'radius of the person cylinder (m)'})
+    person_radius_m: float = field(default=0.25, metadata={
+        'help': "radius of the person cylinder (m); MATRIX's annotation boxes use 0.16 m, but a wider box "
+                'tolerates the BEV position error (about 0.1 m) better: offline 2D precision / recall on the real '
+                'sample 91.7 / 88.1 percent at 0.25 m, 88.2 / 84.8 percent at 0.16 m'})
     person_height_m: float = field(default=1.75, metadata={'help': 'height of the person cylinder (m)'})
+    bottom_at_foot: bool = field(default=True, metadata={
+        'help': "the box runs from the cylinder's top down to the projected foot point (MATRIX's and the "
+                "simulator's annotation convention); false: to the bottom of the projected outline"})
     visibility_heights_m: list[float] = field(default_factory=lambda: [0.05, 0.9], metadata={
         'help': 'a person is hidden by an obstacle when the ray to its axis at any of these heights is blocked'})
     min_in_image: float = field(default=0.5, metadata={
@@ -148,6 +155,9 @@ def image_boxes(camera: Camera, track_ids, xy, scores, settings: ImageBoxSetting
     in_front = (camera.depth(outline) > 0).reshape(n, -1).all(axis=1)
     uv = np.nan_to_num(camera.project(outline).reshape(n, -1, 2))   # behind the camera: dropped below
     full = np.concatenate([uv.min(axis=1), uv.max(axis=1)], axis=1)
+    foot = np.column_stack([xy, np.zeros(n)])
+    if s.bottom_at_foot:
+        full[:, 3] = np.nan_to_num(camera.project(foot)[:, 1])
     boxes = clip_box(full, camera.width, camera.height)
     with np.errstate(invalid='ignore', divide='ignore'):
         keep = in_front & (box_area(boxes) >= s.min_in_image * box_area(full)) & (box_area(boxes) > 0)
@@ -156,7 +166,6 @@ def image_boxes(camera: Camera, track_ids, xy, scores, settings: ImageBoxSetting
     idx = np.flatnonzero(keep)
     if not len(idx):
         return []
-    foot = np.column_stack([xy, np.zeros(n)])
     boxes = boxes[idx]
     dist = np.linalg.norm(foot[idx] - camera.center, axis=1)
     order = np.argsort(dist, kind='stable')
