@@ -5,12 +5,19 @@ and that frame's camera of the drone; the annotated boxes are the dataset's ``Pe
 (person ids), clipped to the image like the predictions. Metrics: :mod:`matrix_core.metrics.image_boxes`.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from pathlib import Path
 
+import cv2
 import numpy as np
+from rosbags.highlevel import AnyReader
+
+from matrix_core import topics
+from matrix_core.bags.messages import stamp_ns
 
 from matrix_core.fusion.image_boxes import (ImageBoxSettings, camera_from_ground_homography, clip_box,
                                             draw_image_boxes, image_boxes, obstacles_from_meta)
+from matrix_core.message_fields import image_from_msg
 from matrix_core.metrics.image_boxes import FrameBoxes, per_view_metrics
 
 
@@ -28,8 +35,6 @@ class ImagePlaneScores:
 
 def scene_box_settings(dataset, settings: ImageBoxSettings = None) -> ImageBoxSettings:
     """``settings`` with the dataset's own obstacle boxes when its meta states them (simulated folders)."""
-    from dataclasses import replace
-
     s = settings or ImageBoxSettings()
     return replace(s, obstacle_boxes=obstacles_from_meta(getattr(dataset, 'meta', None), s.obstacle_boxes))
 
@@ -65,12 +70,6 @@ def score_image_plane(dataset, tracks, camera_of, views, frames, settings: Image
 def read_recorded_boxes(path, clock) -> FrameBoxes:
     """Every ``<view>/detections_2d`` (matrix_msgs/Detection2DArray) of a recorder bag; frames by ``clock``
     (the sequence clock); the view is the topic's drone ('/D3/detections_2d' -> 'D3')."""
-    from pathlib import Path
-
-    from rosbags.highlevel import AnyReader
-
-    from matrix_core import topics
-    from matrix_core.bags.messages import stamp_ns
 
     rows = ([], [], [], [], [])
     with AnyReader([Path(path)]) as reader:
@@ -87,13 +86,6 @@ def read_recorded_boxes(path, clock) -> FrameBoxes:
 
 def read_recorded_overlays(path, clock, frame: int) -> dict:
     """view -> (H, W, 3) BGR image of every ``<view>/overlay/compressed`` of a recorder bag at ``frame``."""
-    from pathlib import Path
-
-    from rosbags.highlevel import AnyReader
-
-    from matrix_core import topics
-    from matrix_core.bags.messages import stamp_ns
-    from matrix_core.message_fields import image_from_msg
 
     images = {}
     with AnyReader([Path(path)]) as reader:
@@ -147,8 +139,6 @@ def predicted_boxes(tracks, camera_of, views, settings: ImageBoxSettings) -> Fra
 def draw_frame_png(path, images: dict, pred: FrameBoxes, gt: FrameBoxes, frame: int, title: str = '') -> None:
     """A mosaic (4 columns) of every drone's image of ``frame`` (view -> BGR image) with the annotated boxes
     (thin white) and the predicted boxes with their ids (colour per id)."""
-    import cv2
-
     tiles = []
     for v, image in images.items():
         img = image.copy()

@@ -8,7 +8,7 @@ A track at ground position (x, y) is modelled as an upright cylinder standing on
 Visibility rule (a track is REPORTED in a view when all hold):
     1. the whole cylinder is in front of the camera (every outline point has positive depth);
     2. it is in the image: at least ``min_in_image`` of its unclipped box's area lies inside the image
-       (MATRIX annotates people whose feet are out of the image as long as most of them is in it);
+       (MATRIX annotates people partly out of the image, e.g. with their feet below its edge);
     3. it is not hidden by the scene's obstacles: the exact segment-box test
        (:func:`~matrix_core.geometry.occlusion.segments_blocked`) from the camera centre to the cylinder's
        axis is clear at every height of ``visibility_heights_m`` (the simulator's line-of-sight heights).
@@ -22,10 +22,13 @@ Pixels: OpenCV pixel centres on the unmirrored image; a box is ``x_min y_min x_m
 
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
 from matrix_core.geometry.camera import Camera, pose_matrix
+from matrix_core.geometry.homography import implied_camera
 from matrix_core.geometry.occlusion import as_boxes, segments_blocked
+from matrix_core.register.scene import scene_from_meta
 from matrix_core.register.settings import MATRIX_BLOCK
 
 OUTLINE_POINTS = 16          # points per circle of the cylinder's outline
@@ -77,8 +80,6 @@ class ImageBox:
 
 def obstacles_from_meta(meta: dict, default) -> list:
     """The obstacle boxes a dataset's meta states (simulated folders: block and pillars), else ``default``."""
-    from matrix_core.register.scene import scene_from_meta
-
     scene = scene_from_meta(meta)
     return list(default) if scene is None else list(scene[0])
 
@@ -91,8 +92,6 @@ def implied_view_camera(implied, size: tuple) -> Camera:
 
 def camera_from_ground_homography(img_H_ground, K, size: tuple) -> Camera:
     """The camera a (3, 3) ground -> pixel homography implies with intrinsics ``K`` (3, 3), image (w, h)."""
-    from matrix_core.geometry.homography import implied_camera
-
     return implied_view_camera(implied_camera(np.asarray(K, dtype=np.float64), img_H_ground), size)
 
 
@@ -179,8 +178,6 @@ def image_boxes(camera: Camera, track_ids, xy, scores, settings: ImageBoxSetting
 
 def id_colour(track_id: int) -> tuple:
     """A distinct, stable BGR colour per id (golden-ratio hues, as the RViz markers)."""
-    import cv2
-
     hue = int((int(track_id) * 0.618034) % 1.0 * 179)
     return tuple(int(c) for c in cv2.cvtColor(np.uint8([[[hue, 255, 255]]]), cv2.COLOR_HSV2BGR)[0, 0])
 
@@ -188,8 +185,6 @@ def id_colour(track_id: int) -> tuple:
 def draw_image_boxes(image: np.ndarray, boxes, ids, occluded=None, thickness: int = 4) -> np.ndarray:
     """A copy of the (H, W, 3) BGR ``image`` with (N, 4) ``boxes`` and their ids drawn, a colour per id;
     occluded boxes (N,) bool are drawn thin."""
-    import cv2
-
     img = image.copy()
     scale = max(img.shape[1] / 1920, 0.3)
     boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
