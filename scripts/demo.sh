@@ -23,12 +23,14 @@ live_graph() {  # live_graph NAME BAG DATASET [run_graph flags...]: the graph, t
   rm -rf "${OUT:?}/$name"
   echo "== $name: live graph (ROS_DOMAIN_ID=$ROS_DOMAIN_ID): run_graph --bag $bag --dataset $dataset $*"
   "$RUN_GRAPH" --bag "$bag" --dataset "$dataset" --drones_per_process 4 --monitor --monitor_out "$OUT/$name" \
-    --record "$OUT/$name/recording" --log_dir "$OUT/$name/logs" "$@"
+    --record "$OUT/$name/recording" --log_dir "$OUT/$name/logs" --overlay "$@"
   echo "-- $name: calibration (calib) and registration (register) published live, against the ground truth"
   cat "$OUT/$name/graph_summary.txt"
   echo "-- $name: detections and tracks published live (fuse), against the bag's ground truth"
+  echo "   and in the image plane: every drone's detections_2d (fused ids) against the annotated boxes"
   matrix-tracker evaluate-recording "$OUT/$name/recording" --ground-truth "$bag" \
-    --json "$OUT/$name/live_metrics.json" --png "$OUT/$name/tracks.png"
+    --json "$OUT/$name/live_metrics.json" --png "$OUT/$name/tracks.png" --dataset "$dataset" \
+    --png-2d "$OUT/$name/boxes_2d.png" --boxes-2d "$OUT/$name/boxes_2d.txt" --overlays "$OUT/$name/overlays"
 }
 
 echo "== dataset"
@@ -58,9 +60,11 @@ import json, sys
 from pathlib import Path
 d = Path(sys.argv[1])
 live, off = (json.loads((d / f).read_text()) for f in ('live_metrics.json', 'offline/metrics.json'))
-print(f'{"":>8} {"MODA":>7} {"MOTA":>7} {"IDF1":>7}')
-for name, m in (('live', live), ('offline', off)):
-    print(f'{name:>8} {100 * m["detection"]["moda"]:7.2f} {100 * m["tracking"]["mota"]:7.2f} {100 * m["tracking"]["idf1"]:7.2f}')
+print(f'{"":>8} {"MODA":>7} {"MOTA":>7} {"IDF1":>7}   2D: {"prec":>6} {"rec":>6} {"MOTA":>6} {"IDF1":>6}')
+for name, m, m2 in (('live', live, live['image_plane']['per_drone']['all']), ('offline', off, off['image_plane']['all'])):
+    print(f'{name:>8} {100 * m["detection"]["moda"]:7.2f} {100 * m["tracking"]["mota"]:7.2f} {100 * m["tracking"]["idf1"]:7.2f}'
+          f'       ' + ' '.join(f'{100 * m2[k]:6.2f}' for k in ('precision', 'recall', 'mota', 'idf1')))
 EOF
 echo "pictures: $OUT/real/graph_overview.png, $OUT/real/tracks.png, $OUT/simulated/tracks.png," \
-     "$OUT/simulated/offline/trajectories.png; node logs: $OUT/{real,simulated}/logs/"
+     "$OUT/simulated/offline/trajectories.png; image plane: $OUT/{real,simulated}/boxes_2d.png and the" \
+     "overlays fuse published, $OUT/{real,simulated}/overlays/overlay_D*.png; node logs: $OUT/{real,simulated}/logs/"

@@ -19,6 +19,8 @@ CAMERA_INFO = 'camera_info'                      # calib's per-frame calibration
 POSE = 'pose'                                    # calib's camera pose
 HOMOGRAPHY = 'homography'                        # register's registration
 GROUND_TRUTH_CAMERA_INFO = 'ground_truth/camera_info'
+DETECTIONS_2D = 'detections_2d'                  # fuse's boxes of the tracks in the drone's image
+OVERLAY_COMPRESSED = 'overlay/compressed'        # fuse's overlay: the image with those boxes and ids (JPEG)
 GROUND_TRUTH_POSE = 'ground_truth/pose'
 
 # Graph-wide streams.
@@ -37,6 +39,7 @@ POSE_ARRAY_TYPE = 'geometry_msgs/msg/PoseArray'
 IDS_TYPE = 'std_msgs/msg/Int32MultiArray'
 HOMOGRAPHY_TYPE = 'matrix_msgs/msg/HomographyStamped'
 TRACK_ARRAY_TYPE = 'matrix_msgs/msg/TrackArray'
+DETECTION_2D_ARRAY_TYPE = 'matrix_msgs/msg/Detection2DArray'
 
 
 def drone_topic(view: str, stream: str) -> str:
