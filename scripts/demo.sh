@@ -24,7 +24,7 @@ live_graph() {  # live_graph NAME BAG DATASET [ARG:=VALUE...]: the graph, then t
   rm -rf "${OUT:?}/$name"
   mkdir -p "$OUT/$name/logs"
   local args=(bag:="$bag" dataset:="$dataset" drones_per_process:=4 monitor:=true monitor_out:="$OUT/$name"
-              record:="$OUT/$name/recording" "$@")
+              record:="$OUT/$name/recording" overlay:=true "$@")
   if command -v ros2 >/dev/null 2>&1; then   # the path users take; it ends by itself after the bag
     echo "== $name: live graph (ROS_DOMAIN_ID=$ROS_DOMAIN_ID): ros2 launch matrix_bringup full_graph.launch.py ${args[*]}"
     if ! ROS_LOG_DIR="$OUT/$name/logs" ros2 launch matrix_bringup full_graph.launch.py "${args[@]}" \
@@ -43,8 +43,10 @@ live_graph() {  # live_graph NAME BAG DATASET [ARG:=VALUE...]: the graph, then t
   echo "-- $name: calibration (calib) and registration (register) published live, against the ground truth"
   cat "$OUT/$name/graph_summary.txt"
   echo "-- $name: detections and tracks published live (fuse), against the bag's ground truth"
+  echo "   and in the image plane: every drone's detections_2d (fused ids) against the annotated boxes"
   matrix-tracker evaluate-recording "$OUT/$name/recording" --ground-truth "$bag" \
-    --json "$OUT/$name/live_metrics.json" --png "$OUT/$name/tracks.png"
+    --json "$OUT/$name/live_metrics.json" --png "$OUT/$name/tracks.png" --dataset "$dataset" \
+    --png-2d "$OUT/$name/boxes_2d.png" --boxes-2d "$OUT/$name/boxes_2d.txt" --overlays "$OUT/$name/overlays"
 }
 
 echo "== dataset"
@@ -74,9 +76,11 @@ import json, sys
 from pathlib import Path
 d = Path(sys.argv[1])
 live, off = (json.loads((d / f).read_text()) for f in ('live_metrics.json', 'offline/metrics.json'))
-print(f'{"":>8} {"MODA":>7} {"MOTA":>7} {"IDF1":>7}')
-for name, m in (('live', live), ('offline', off)):
-    print(f'{name:>8} {100 * m["detection"]["moda"]:7.2f} {100 * m["tracking"]["mota"]:7.2f} {100 * m["tracking"]["idf1"]:7.2f}')
+print(f'{"":>8} {"MODA":>7} {"MOTA":>7} {"IDF1":>7}   2D: {"prec":>6} {"rec":>6} {"MOTA":>6} {"IDF1":>6}')
+for name, m, m2 in (('live', live, live['image_plane']['per_drone']['all']), ('offline', off, off['image_plane']['all'])):
+    print(f'{name:>8} {100 * m["detection"]["moda"]:7.2f} {100 * m["tracking"]["mota"]:7.2f} {100 * m["tracking"]["idf1"]:7.2f}'
+          f'       ' + ' '.join(f'{100 * m2[k]:6.2f}' for k in ('precision', 'recall', 'mota', 'idf1')))
 EOF
 echo "pictures: $OUT/real/graph_overview.png, $OUT/real/tracks.png, $OUT/simulated/tracks.png," \
-     "$OUT/simulated/offline/trajectories.png; node logs: $OUT/{real,simulated}/logs/"
+     "$OUT/simulated/offline/trajectories.png; image plane: $OUT/{real,simulated}/boxes_2d.png and the" \
+     "overlays fuse published, $OUT/{real,simulated}/overlays/overlay_D*.png; node logs: $OUT/{real,simulated}/logs/"

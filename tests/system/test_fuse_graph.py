@@ -1,6 +1,7 @@
 """System test: a simulated sequence bag replays in lockstep through the `fuse` node while the `recorder`
 records its output, each in its own process over DDS; the recording, scored against the bag's ground
-truth, must match the offline `matrix-tracker evaluate` of the same checkpoint on the same frames."""
+truth, must match the offline `matrix-tracker evaluate` of the same checkpoint on the same frames, in the
+BEV and in the image plane (every drone's detections_2d against the annotated boxes)."""
 
 import json
 import os
@@ -39,10 +40,12 @@ def test_live_graph_equals_offline(node_executable, tmp_path):
     infos = sorted(t for t in topics if t.endswith('ground_truth/camera_info'))
     fuse = _start(node_executable, 'matrix_bev_tracker', 'fuse', 'input_kind:=camera_info',
                   'camera_info_topic:=/{view}/ground_truth/camera_info', 'use_sim_time:=true',
-                  'sync_timeout:=30.0')   # lockstep: never cut a frame short (DDS retransmits after ~3 s)
+                  'sync_timeout:=30.0', f'scene_dataset:={sim}')   # lockstep: never cut a frame short (DDS retransmits after ~3 s)
+    boxes = [t.replace('image_raw', 'detections_2d') for t in images]
     recorder = _start(node_executable, 'matrix_ros', 'recorder', f'out:={rec}',
-                      'topics:=[/tracks,/detections,/bev_heatmap]',
-                      'types:=[matrix_msgs/msg/TrackArray,matrix_msgs/msg/TrackArray,nav_msgs/msg/OccupancyGrid]',
+                      f'topics:=[/tracks,/detections,/bev_heatmap,{",".join(boxes)}]',
+                      'types:=[matrix_msgs/msg/TrackArray,matrix_msgs/msg/TrackArray,nav_msgs/msg/OccupancyGrid,'
+                      + ','.join(['matrix_msgs/msg/Detection2DArray'] * len(boxes)) + ']',
                       'tracks_topic:=/tracks', f'mot_file:={tmp_path / "tracks.txt"}', 'use_sim_time:=true')
     _wait_for_endpoints('/tracks', publishers=1, subscribers=1)   # fuse -> recorder, before frame 0 leaves
     player = _start(node_executable, 'matrix_ros', 'bag_player', f'bag:={sim / "bag"}', 'wait_for_subscribers:=1',
@@ -65,12 +68,19 @@ def test_live_graph_equals_offline(node_executable, tmp_path):
     recording = read_recording_bag(rec)
     assert recording.track_frames == list(range(FRAMES)), rec_out   # no frame lost
     live_json = tmp_path / 'live.json'
-    assert cli(['evaluate-recording', str(rec), '--ground-truth', str(sim / 'bag'), '--json', str(live_json)]) == 0
+    assert cli(['evaluate-recording', str(rec), '--ground-truth', str(sim / 'bag'), '--json', str(live_json),
+                '--dataset', str(sim)]) == 0
     live = json.loads(live_json.read_text())
     assert live['detections_source'] == 'detections' and live['frames_without_tracks'] == []
     for part, key in (('detection', 'moda'), ('tracking', 'mota'), ('detection', 'recall')):
         assert abs(live[part][key] - offline[part][key]) <= 0.01, (key, live[part], offline[part])
     assert offline['detection']['moda'] > 0.5     # the shipped model detects the crowd at all
+    # image plane: the same boxes live (CameraInfo) and offline (the camera its homography implies)
+    live_2d, offline_2d = live['image_plane']['per_drone'], offline['image_plane']
+    assert set(live_2d) == set(offline_2d) == {f'D{k}' for k in range(1, 9)} | {'all'}
+    for key in ('precision', 'recall', 'mota', 'idf1'):
+        assert abs(live_2d['all'][key] - offline_2d['all'][key]) <= 0.01, (key, live_2d['all'], offline_2d['all'])
+    assert live['image_plane']['ids_in_tracks'] == 1.0     # every drone's ids are the BEV track ids
     # the recorder's MOT text scores the same tracks
     mot_json = tmp_path / 'mot.json'
     assert cli(['evaluate-recording', str(tmp_path / 'tracks.txt'), '--ground-truth', str(sim / 'bag'),

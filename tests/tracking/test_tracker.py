@@ -141,3 +141,13 @@ def test_rejects_bad_input():
         BevDetections([[np.nan, 0]], [0.9])
     with pytest.raises(ValueError, match='low_score'):
         TrackerSettings(low_score=0.8, high_score=0.5)
+
+
+def test_a_track_reports_its_detection_of_the_frame_beside_the_filtered_position():
+    tr = BevTracker(TrackerSettings(birth_hits=1, report_coasting=1))
+    tr.update(single([0, 0]))
+    (out,) = tr.update(single([0.6, 0.2]))
+    np.testing.assert_allclose(out.detection_xy, [0.6, 0.2])    # where the person is now
+    assert not np.allclose(out.xy, out.detection_xy)             # the filter lags behind
+    (coasting,) = tr.update(single(np.zeros((0, 2))))
+    np.testing.assert_allclose(coasting.detection_xy, coasting.xy)   # no detection: the prediction

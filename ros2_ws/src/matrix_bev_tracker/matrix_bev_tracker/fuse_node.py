@@ -8,7 +8,8 @@ one, or a confidence below ``min_confidence``, makes the view missing) or ``came
 Messages are grouped by stamp (``matrix_core.sync``); a frame is fused when every view arrived or
 ``sync_timeout`` wall seconds after its first message (a stopped drone never stalls the graph), by
 ``matrix_core.fusion`` (``view_inputs``, ``fuser.BevFuser``). Every fused frame publishes (``matrix_ros.
-fusion_messages``) tracks, detections (id 0), RViz markers, the BEV heatmap and ``/diagnostics``. Bad input is
+fusion_messages``) tracks, detections (id 0), RViz markers, the BEV heatmap, ``/diagnostics`` and per drone the
+tracks' image boxes (``matrix_ros.image_outputs``; optionally an overlay image). Bad input is
 logged and the view counts as missing. ``~/reset`` (std_srvs/Trigger) starts fresh, and so does the node when
 stamps go back by more than ``tracker_reset_gap_s`` (a replay restarted).
 """
@@ -32,6 +33,7 @@ from matrix_core.fusion.view_inputs import ViewInputs
 from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
 from matrix_ros import fusion_messages as out
 from matrix_ros.connect import SubscribeWhenConnected
+from matrix_ros.image_outputs import ImageOutputs
 from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
 from matrix_ros.params import declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
@@ -53,6 +55,7 @@ class FuseNode(Node):
                      'diagnostics': self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, qos)}
         if s.heatmap_topic:
             self.pubs['heatmap'] = self.create_publisher(OccupancyGrid, s.heatmap_topic, qos)
+        self.image_outputs = ImageOutputs(self, s)
         self.create_service(Trigger, '~/reset', self._on_reset)
         # Sync timeouts run on the wall clock: under /clock in lockstep, sim time stops while the player waits.
         self.create_timer(0.05, self._poll, clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -122,6 +125,7 @@ class FuseNode(Node):
         self.pubs['tracks'].publish(out.tracks_msg(header, result.tracks))
         self.pubs['detections'].publish(out.detections_msg(header, result.detections, s.frame_interval_s))
         self.pubs['markers'].publish(out.markers_msg(header, result.tracks))
+        self.image_outputs.publish(header.stamp, frame, result.tracks)
         if 'heatmap' in self.pubs:
             self.pubs['heatmap'].publish(out.heatmap_msg(header, self.fuser.grid, result.heatmap))
         self.frames_published += 1

@@ -1,21 +1,34 @@
-"""Parameters of the ``fuse`` node: the fusion settings (``matrix_core.fusion.settings``, incl. the tracker's)
-plus the node's outputs."""
+"""Parameters of the ``fuse`` node: the fusion settings (``matrix_core.fusion.settings``, incl. the tracker's),
+the image boxes' person model (``matrix_core.fusion.image_boxes``) plus the node's outputs."""
 
 from dataclasses import dataclass, field
 
 from matrix_core import topics
+from matrix_core.fusion.image_boxes import ImageBoxSettings
 from matrix_core.fusion.settings import FuseSettings
 from matrix_ros.node_settings import NodeSettings
 
 
 @dataclass
-class FuseNodeSettings(NodeSettings, FuseSettings):
+class FuseNodeSettings(NodeSettings, ImageBoxSettings, FuseSettings):
     tracks_topic: str = field(default=topics.TRACKS, metadata={'help': 'matrix_msgs/TrackArray of the tracks'})
     detections_topic: str = field(default=topics.DETECTIONS, metadata={
         'help': 'matrix_msgs/TrackArray of the detections (id 0)'})
     markers_topic: str = field(default=topics.MARKERS, metadata={'help': 'visualization_msgs/MarkerArray of the tracks'})
     heatmap_topic: str = field(default=topics.BEV_HEATMAP, metadata={
         'help': 'nav_msgs/OccupancyGrid heatmap ("" = off)'})
+    detections_2d_topic: str = field(default='{view}/' + topics.DETECTIONS_2D, metadata={
+        'help': 'matrix_msgs/Detection2DArray per drone: the tracks\' boxes in its image, with the fused ids '
+                '(pattern; "" = off; see matrix_core.fusion.image_outputs for the camera of each view)'})
+    overlay: bool = field(default=False, metadata={
+        'help': 'also publish each drone\'s image with the boxes and ids drawn on overlay_topic (JPEG; costs a '
+                'full image decode and encode per view and frame)'})
+    overlay_topic: str = field(default='{view}/' + topics.OVERLAY_COMPRESSED, metadata={
+        'help': 'sensor_msgs/CompressedImage overlay topic pattern'})
+    scene_dataset: str = field(default='', metadata={
+        'help': 'MATRIX folder of the scene (the one the graph replays): its reference intrinsics give the camera '
+                'a registration implies (input_kind homography), its meta the obstacles; "" = no 2D outputs '
+                'from homographies'})
     world_frame: str = field(default=topics.WORLD_FRAME, metadata={'help': 'frame_id of everything published'})
     stamp_tolerance: float = field(default=0.001, metadata={'help': 'stamps closer than this (s) are one frame'})
     jpeg_reduced_decode: bool = field(default=True, metadata={

@@ -29,7 +29,9 @@ VIEWS = list(MATRIX_VIEWS)
 RECORDED = (('/tracks', 'matrix_msgs/msg/TrackArray'), ('/detections', 'matrix_msgs/msg/TrackArray'),
             ('/bev_heatmap', 'nav_msgs/msg/OccupancyGrid'), ('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray'))
 PER_VIEW_RECORDED = (('camera_info', 'sensor_msgs/msg/CameraInfo'), ('pose', 'geometry_msgs/msg/PoseStamped'),
-                     ('homography', 'matrix_msgs/msg/HomographyStamped'))
+                     ('homography', 'matrix_msgs/msg/HomographyStamped'),
+                     ('detections_2d', 'matrix_msgs/msg/Detection2DArray'))
+OVERLAY_RECORDED = ('overlay/compressed', 'sensor_msgs/msg/CompressedImage')   # with GraphSettings.overlay
 
 
 @dataclass
@@ -59,6 +61,9 @@ class GraphSettings:
     input_kind: str = field(default='homography', metadata={
         'help': "fuse on register's homographies (homography) or on calib's camera_info (camera_info)"})
     checkpoint: str = field(default='', metadata={'help': 'BEV checkpoint (.pt); empty: the fuse node default'})
+    overlay: bool = field(default=False, metadata={
+        'help': "fuse also publishes (and the recorder records) each drone's image with the tracks' boxes and ids "
+                'drawn (Dn/overlay/compressed)'})
     sync_timeout: float = field(default=5.0, metadata={
         'help': 'seconds the fuse node waits for a late drone before fusing without it (without lockstep; '
                 'in lockstep it waits lockstep_timeout, so that every view is fused)'})
@@ -198,11 +203,13 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
     # In lockstep the fuse node waits as long as the player: every view is fused, results are deterministic.
     fuse = {'views': list(s.views), 'input_kind': s.input_kind, 'image_kind': 'compressed' if bag.compressed else 'raw',
             'sync_timeout': s.lockstep_timeout if s.lockstep else s.sync_timeout,
+            'scene_dataset': s.dataset, **({'overlay': True} if s.overlay else {}),
             **({'checkpoint': s.checkpoint} if s.checkpoint else {}), **sim}
     nodes.append(NodeSpec('matrix_bev_tracker', 'fuse', 'fuse', '', fuse,
                           [s.fuse_params or share_file('matrix_bev_tracker', 'config', 'fuse.yaml')]))
     if s.record:
-        topics = [*RECORDED, *((f'/{v}/{t}', m) for v in s.views for t, m in PER_VIEW_RECORDED)]
+        per_view = PER_VIEW_RECORDED + ((OVERLAY_RECORDED,) if s.overlay else ())
+        topics = [*RECORDED, *((f'/{v}/{t}', m) for v in s.views for t, m in per_view)]
         nodes.append(NodeSpec('matrix_ros', 'recorder', 'recorder', '', {
             'out': s.record, 'topics': [t for t, _ in topics], 'types': [m for _, m in topics],
             'tracks_topic': '/tracks', 'sequence_bag': str(s.bag), **sim}))

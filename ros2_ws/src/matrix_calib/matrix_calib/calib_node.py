@@ -32,6 +32,7 @@ from matrix_ros import diagnostics
 from matrix_ros.connect import SubscribeWhenConnected
 from matrix_ros.conversions import (ConversionError, camera_to_camera_info, camera_to_pose, msg_to_image,
                                     registration_from_msg, stamp_to_seconds)
+from matrix_ros.node_settings import hosted_drones
 from matrix_ros.params import declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
 
@@ -45,9 +46,7 @@ class CalibNode(Node):
         reference = MatrixDataset(s.prior_dataset) if s.prior_dataset else None
         self.calibrators, self.pubs, self.syncs, self.connections = {}, {}, {}, {}
         self.diag_pub = self.create_publisher(diagnostics.DiagnosticArray, topics.DIAGNOSTICS_TOPIC, publisher_qos())
-        # several drones: relative names under each drone; one drone: the node's namespace is the drone's
-        drones = [(v, v) for v in s.views] or [(self.get_namespace().strip('/').split('/')[-1] or 'camera', '')]
-        for view, prefix in drones:
+        for view, prefix in hosted_drones(self, s.views):
             self.calibrators[view] = DroneCalibrator(self.scene, s, *self._prior(view, reference))
             self.pubs[view] = (
                 self.create_publisher(CameraInfo, topics.drone_topic(prefix, topics.CAMERA_INFO), publisher_qos()),
@@ -125,10 +124,12 @@ class CalibNode(Node):
                 continue
             msg = frame.items.get('registration')
             registration = None if msg is None else registration_from_msg(msg)
-            if registration is None or not registration.ok:
-                self.get_logger().warning(f'{view}: t={frame.stamp:.3f} s: ' + (
-                    f'no registration within {self.settings.registration_wait_s} s' if registration is None else
-                    f'registration {registration.status}: {registration.message}') + '; calibrated from the image motion')
+            if registration is None:
+                self.get_logger().warning(f'{view}: no registration of t={frame.stamp:.3f} s within '
+                                          f'{self.settings.registration_wait_s} s: calibrated from the image motion')
+            elif not registration.ok:
+                self.get_logger().warning(f'{view}: t={frame.stamp:.3f} s: registration {registration.status}: '
+                                          f'{registration.message}; calibrated from the image motion')
             self._calibrate(view, *frame.items['image'], registration)
 
     def _calibrate(self, view: str, msg, received: float, registration=None):

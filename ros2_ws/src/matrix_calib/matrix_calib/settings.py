@@ -11,7 +11,8 @@ from matrix_ros.node_settings import NodeSettings
 @dataclass
 class CalibNodeSettings(NodeSettings, CalibSettings):
     views: list[str] = field(default_factory=list, metadata={
-        'help': 'drones hosted by this process, topics <V>/... (relative); empty = one drone in the node namespace'})
+        'help': 'drones hosted by this process, topics <V>/... (relative; bare for the drone whose namespace the '
+                'node runs in); empty = the one drone of the node namespace'})
     compressed: bool = field(default=False, metadata={'help': 'subscribe image/compressed instead of image_raw'})
     qos: str = field(default='sensor_data', metadata={'help': 'QoS of the image subscription: sensor_data or reliable'})
     world_frame: str = field(default=WORLD_FRAME, metadata={'help': 'frame_id of the published pose'})

@@ -3,8 +3,8 @@
 Per-drone streams are RELATIVE names under the drone, ``<view>/<stream>`` (e.g. ``D3/image_raw``): a node
 in the root namespace resolves them to ``/D3/image_raw``, one started in a namespace (``--ros-args -r
 __ns:=/fleet``) to ``/fleet/D3/image_raw``, and each is remappable (``-r D3/image_raw:=/cam3/image``) as ROS
-users expect. A node that serves ONE drone from inside its namespace (``views`` empty) uses the bare
-stream name (``image_raw``). Bags store the absolute names of a root-namespace graph (:func:`absolute`).
+users expect. A node started in a drone's namespace (``/D3``, as ``run_graph`` starts one process per drone)
+uses the bare stream names (``image_raw``) for that drone (``matrix_ros.node_settings.hosted_drones``). Bags store the absolute names of a root-namespace graph (:func:`absolute`).
 Graph-wide outputs (``tracks``, ``detections``, ...) are relative too; ``/diagnostics`` is absolute by ROS
 convention.
 """
@@ -19,6 +19,8 @@ CAMERA_INFO = 'camera_info'                      # calib's per-frame calibration
 POSE = 'pose'                                    # calib's camera pose
 HOMOGRAPHY = 'homography'                        # register's registration
 GROUND_TRUTH_CAMERA_INFO = 'ground_truth/camera_info'
+DETECTIONS_2D = 'detections_2d'                  # fuse's boxes of the tracks in the drone's image
+OVERLAY_COMPRESSED = 'overlay/compressed'        # fuse's overlay: the image with those boxes and ids (JPEG)
 GROUND_TRUTH_POSE = 'ground_truth/pose'
 
 # Graph-wide streams.
@@ -37,6 +39,7 @@ POSE_ARRAY_TYPE = 'geometry_msgs/msg/PoseArray'
 IDS_TYPE = 'std_msgs/msg/Int32MultiArray'
 HOMOGRAPHY_TYPE = 'matrix_msgs/msg/HomographyStamped'
 TRACK_ARRAY_TYPE = 'matrix_msgs/msg/TrackArray'
+DETECTION_2D_ARRAY_TYPE = 'matrix_msgs/msg/Detection2DArray'
 
 
 def drone_topic(view: str, stream: str) -> str:

@@ -32,6 +32,7 @@ from matrix_register.settings import RegisterNodeSettings
 from matrix_ros import diagnostics
 from matrix_ros.connect import SubscribeWhenConnected
 from matrix_ros.conversions import ConversionError, camera_info_to_camera, msg_to_image, registration_to_msg
+from matrix_ros.node_settings import hosted_drones
 from matrix_ros.params import declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
 
@@ -47,7 +48,7 @@ class RegisterNode(Node):
         s.apply_threads()
         self.backend = make_backend(s)
         self.registrars, self.pubs, self.connections = {}, {}, {}
-        self.pairing = {v: ReferencePairing() for v in s.views}
+        self.pairing = {}
         self.area = tuple(s.area)
         dataset = MatrixDataset(s.reference_dataset) if s.reference_dataset else None
         if dataset is not None:
@@ -56,29 +57,30 @@ class RegisterNode(Node):
             s = self.settings
             if note:
                 self.get_logger().info(note)
-        for view in s.views:
+        for view, prefix in hosted_drones(self, s.views):
+            self.pairing[view] = ReferencePairing()
             if dataset is not None:
                 self.registrars[view] = Registrar(s, dataset.reference_image(view), dataset.reference_camera(view),
                                                   self.area, f'{view}/reference', self.backend)
-            self._subscribe_view(view, needs_camera_info=dataset is None)
-            self.pubs[view] = self.create_publisher(HomographyStamped, topics.drone_topic(view, topics.HOMOGRAPHY),
+            self._subscribe_view(view, prefix, needs_camera_info=dataset is None)
+            self.pubs[view] = self.create_publisher(HomographyStamped, topics.drone_topic(prefix, topics.HOMOGRAPHY),
                                                     publisher_qos())
         self.diag_pub = self.create_publisher(diagnostics.DiagnosticArray, topics.DIAGNOSTICS_TOPIC, publisher_qos())
         self.get_logger().info(f'registering {s.views} with backend {self.backend.name} at scale {s.scale}; '
                                f'reference: {s.reference_dataset or "first frame with CameraInfo"}')
 
-    def _subscribe_view(self, view: str, needs_camera_info: bool) -> None:
+    def _subscribe_view(self, view: str, prefix: str, needs_camera_info: bool) -> None:
         """The view's images; without a reference dataset they wait for its CameraInfo stream to connect."""
         s = self.settings
 
         def subscribe_images():
             msg_type, stream = (CompressedImage, topics.IMAGE_COMPRESSED) if s.compressed else (Image, s.image_topic)
-            self.create_subscription(msg_type, topics.drone_topic(view, stream),
+            self.create_subscription(msg_type, topics.drone_topic(prefix, stream),
                                      lambda m: self._on_image(view, m), qos_by_name(s.qos))
         if not needs_camera_info:
             subscribe_images()
             return
-        info = self.create_subscription(CameraInfo, topics.drone_topic(view, s.camera_info_topic),
+        info = self.create_subscription(CameraInfo, topics.drone_topic(prefix, s.camera_info_topic),
                                         lambda m: self._run(view, self.pairing[view].camera_info(_ns(m.header.stamp), m)),
                                         10)
         self.connections[view] = SubscribeWhenConnected(self, view, [info], subscribe_images)

@@ -11,7 +11,8 @@ from matrix_ros.node_settings import NodeSettings
 @dataclass
 class RegisterNodeSettings(NodeSettings, RegisterSettings):
     views: list[str] = field(default_factory=lambda: ['D1'], metadata={
-        'help': 'drones handled by this node; topics are <view>/... (relative: remappable, namespaceable)'})
+        'help': 'drones handled by this node; topics are <view>/... (relative: remappable, namespaceable; bare '
+                'for the drone whose namespace the node runs in; empty: that one drone)'})
     reference_dataset: str = field(default='', metadata={
         'help': 'MATRIX folder whose reference/ holds each view\'s reference image and calibration; empty: '
                 'the first frame with a CameraInfo becomes the reference'})
@@ -24,7 +25,5 @@ class RegisterNodeSettings(NodeSettings, RegisterSettings):
 
     def __post_init__(self):
         super().__post_init__()
-        if not self.views:
-            raise ValueError('views must name at least one drone, e.g. [D1]')
         if len(self.area) != 4 or self.area[0] >= self.area[2] or self.area[1] >= self.area[3]:
             raise ValueError(f'area must be x_min y_min x_max y_max, got {self.area}')

@@ -1,11 +1,12 @@
 """The fuse node's outputs as messages: tracks, detections, RViz markers, the BEV heatmap and the per-frame
-diagnostics (all stamped with the fused frame's header)."""
+diagnostics (all stamped with the fused frame's header), and per drone the image boxes and their overlay."""
 
 import array
 
 import numpy as np
-from matrix_msgs.msg import Track, TrackArray
+from matrix_msgs.msg import Detection2D, Detection2DArray, Track, TrackArray
 from nav_msgs.msg import OccupancyGrid
+from sensor_msgs.msg import CompressedImage
 from visualization_msgs.msg import Marker, MarkerArray
 
 from matrix_ros import diagnostics
@@ -35,6 +36,26 @@ def detections_msg(header, dets, frame_interval_s: float) -> TrackArray:
             tr.velocity.x, tr.velocity.y = (float(-dets.offsets[k, i] / frame_interval_s) for i in range(2))
         msg.tracks.append(tr)
     return msg
+
+
+def detections_2d_msg(header, boxes) -> Detection2DArray:
+    """matrix_core.fusion.image_boxes ImageBoxes of one drone -> Detection2DArray (header: the frame's stamp,
+    the drone's optical frame)."""
+    msg = Detection2DArray(header=header)
+    for b in boxes:
+        x0, y0, x1, y1 = (float(v) for v in b.box)
+        msg.detections.append(Detection2D(id=int(b.track_id), score=float(b.score), x_min=x0, y_min=y0, x_max=x1,
+                                          y_max=y1, distance_m=float(b.distance_m), occluded=bool(b.occluded)))
+    return msg
+
+
+def overlay_msg(header, image, boxes, quality: int = 80) -> CompressedImage:
+    """The drone's (H, W, 3) BGR image with ``boxes`` (ImageBoxes) and their ids drawn, as a JPEG."""
+    from matrix_core.fusion.image_boxes import draw_image_boxes
+    from matrix_core.message_fields import compressed_fields
+
+    drawn = draw_image_boxes(image, [b.box for b in boxes], [b.track_id for b in boxes], [b.occluded for b in boxes])
+    return CompressedImage(header=header, **compressed_fields(drawn, 'jpeg', quality))
 
 
 def markers_msg(header, tracks) -> MarkerArray:

@@ -30,3 +30,14 @@ class NodeSettings:
     def apply_threads(self) -> None:
         """Limit OpenCV's worker pool of this process to ``threads``."""
         cv2.setNumThreads(self.threads)
+
+
+def hosted_drones(node, views) -> list:
+    """(view, topic prefix) of each drone a node serves (``matrix_core.topics``): each of ``views`` under its
+    own name (``D3/image_raw``), except the drone whose namespace the node runs in (``/D3``: bare names,
+    ``image_raw``); with ``views`` empty, that one drone (view = the namespace's last part, 'camera' in the
+    root namespace)."""
+    ns_view = node.get_namespace().strip('/').split('/')[-1]
+    if not views:
+        return [(ns_view or 'camera', '')]
+    return [(view, '' if view == ns_view else view) for view in views]

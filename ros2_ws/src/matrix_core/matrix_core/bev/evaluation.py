@@ -18,6 +18,7 @@ class EvaluationResult:
     detections: BevPoints
     tracks: BevPoints
     outputs: list           # FrameOutput per frame
+    track_detections: BevPoints = None   # the tracks at their detection of each frame (image boxes)
 
 
 def ground_truth_points(frames_data) -> BevPoints:
@@ -38,7 +39,7 @@ def evaluate(model, frames_data, tracker_settings: TrackerSettings = None, thres
     outputs = run_frames(model, frames_data, progress)
     tracker = BevTracker(tracker_settings or TrackerSettings())
     d_frames, d_xy, d_scores = [], [], []
-    t_frames, t_ids, t_xy = [], [], []
+    t_frames, t_ids, t_xy, t_scores, t_det_xy = [], [], [], [], []
     for o in outputs:
         dets = o.detections
         d_frames += [o.frame] * len(dets)
@@ -48,9 +49,12 @@ def evaluate(model, frames_data, tracker_settings: TrackerSettings = None, thres
             t_frames.append(o.frame)
             t_ids.append(t.track_id)
             t_xy.append(t.xy)
+            t_scores.append(t.score)
+            t_det_xy.append(t.detection_xy)
     dets = BevPoints(d_frames, np.concatenate(d_xy) if d_xy else np.zeros((0, 2)),
                      scores=np.concatenate(d_scores) if d_scores else np.zeros(0))
-    tracks = BevPoints(t_frames, np.reshape(t_xy, (-1, 2)), ids=t_ids)
+    tracks = BevPoints(t_frames, np.reshape(t_xy, (-1, 2)), ids=t_ids, scores=t_scores)
     gt = ground_truth_points(frames_data)
     return EvaluationResult(detection_metrics(gt, dets, threshold), tracking_metrics(gt, tracks, gate), gt, dets,
-                            tracks, outputs)
+                            tracks, outputs, BevPoints(t_frames, np.reshape(t_det_xy, (-1, 2)), ids=t_ids,
+                                                       scores=t_scores))

@@ -1,11 +1,18 @@
 """``matrix-tracker evaluate --checkpoint CKPT DATASET``: detect and track with a trained BEV model on a
 MATRIX folder, print one table of all metrics, write PNGs (heatmap vs ground truth, trajectories) and
 the detections/tracks as text (``frame x y score`` / ``frame id x y``).
+
+Image plane: each frame's tracks become boxes in every drone (``fusion.image_boxes``: the person cylinder
+at the track's detection of the frame, projected with the camera the calibration source's homography implies with the drone's reference
+intrinsics, as the live fuse node does), scored against the annotated boxes at IoU >= ``--iou`` per drone
+and overall (``metrics.image_boxes``); written as ``boxes_2d.txt`` (``frame,id,x,y,w,h,score,drone``) and
+drawn for one frame in ``boxes_2d_FRAME.png``.
 """
 
 import json
 from pathlib import Path
 
+from matrix_core.fusion.image_boxes import ImageBoxSettings
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 from matrix_core.tracking.settings import TrackerSettings
 
@@ -26,7 +33,9 @@ def add_parser(subparsers) -> None:
     p.add_argument('--score-threshold', type=float, help='override the checkpoint\'s decoding threshold')
     p.add_argument('--out', default='out/evaluate', help='folder for PNGs, text files and metrics.json')
     p.add_argument('--heatmaps', type=int, default=3, help='number of frames to draw heatmap PNGs for')
+    p.add_argument('--iou', type=float, default=0.5, help='image-plane match threshold (default: 0.5)')
     add_settings_arguments(p, TrackerSettings)
+    add_settings_arguments(p, ImageBoxSettings)
     p.set_defaults(func=run)
 
 
@@ -61,8 +70,10 @@ def run(args) -> int:
     write_bev_points(out / 'detections.txt', result.detections)
     write_bev_points(out / 'tracks.txt', result.tracks)
     write_bev_points(out / 'ground_truth.txt', result.gt)
+    image_plane = _image_plane(args, data, result, views, out)
     (out / 'metrics.json').write_text(json.dumps({'detection': result.detection.as_dict(),
                                                   'tracking': result.tracking.as_dict(),
+                                                  'image_plane': image_plane.as_dict(),
                                                   'calibration': args.calibration, 'views': views,
                                                   'calibration_dir': args.calibration_dir}, indent=2))
     step = max(len(result.outputs) // max(args.heatmaps, 1), 1)
@@ -72,5 +83,22 @@ def run(args) -> int:
                          f'frame {o.frame}: heatmap, ground truth (o), detections (x)')
     save_trajectories_png(out / 'trajectories.png', result.gt, result.tracks, data.grid,
                           f'{Path(args.dataset).name}, frames {frames[0]}-{frames[-1]}')
-    print(f'wrote {out}/: metrics.json, detections.txt, tracks.txt, trajectories.png, heatmap_*.png')
+    print(f'wrote {out}/: metrics.json, detections.txt, tracks.txt, boxes_2d.txt, trajectories.png, '
+          f'heatmap_*.png, boxes_2d_*.png')
     return 0
+
+
+def _image_plane(args, data, result, views, out):
+    """Score, print, write and draw the tracks' boxes in every drone (module docstring)."""
+    from matrix_core.evaluation.image_plane import draw_frame_png, homography_cameras, score_image_plane
+    from matrix_core.metrics.image_boxes import format_view_table, write_mot_boxes
+
+    scores = score_image_plane(data.dataset, result.track_detections, homography_cameras(data.dataset, data.homography_of),
+                               views, data.frames, settings_from_namespace(ImageBoxSettings, args), args.iou)
+    print(f'image plane (2D boxes of the tracks in every drone, IoU >= {args.iou:g}):')
+    print(format_view_table(scores.metrics))
+    write_mot_boxes(out / 'boxes_2d.txt', scores.pred)
+    frame = data.frames[len(data.frames) // 2]
+    draw_frame_png(out / f'boxes_2d_{frame:04d}.png', {v: data.dataset.load_image(v, frame) for v in views},
+                   scores.pred, scores.gt, frame, f'frame {frame}: tracks (id, colour) and annotated boxes (white)')
+    return scores

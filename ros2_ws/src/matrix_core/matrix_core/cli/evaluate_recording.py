@@ -7,6 +7,13 @@ REC is the ``recorder``'s bag folder (matrix_msgs/TrackArray tracks and detectio
 ``--frame-period`` override it; bags written before the clock was stored get 1.0 s and 0.5 s). Detection metrics are of the detections when recorded (else of the
 tracks); tracking metrics of the tracks. Prints the table of ``evaluate`` and lists frames without tracks;
 ``--png`` draws the recorded tracks beside the ground-truth trajectories.
+
+Image plane, with ``--dataset`` (the MATRIX folder the sequence bag was made from; bag frame ``i`` is its
+``i``-th frame): the recorded ``/Dn/detections_2d`` against the annotated boxes at IoU >= ``--iou``, per drone
+and overall (precision, recall, MOTA, IDF1; ``metrics.image_boxes``), and the share of 2D ids that are
+track ids of /tracks in the same frame; ``--boxes-2d`` writes them as ``frame,id,x,y,w,h,score,drone``,
+``--png-2d`` draws one frame of every drone, ``--overlays DIR`` writes the recorded overlay images
+(``/Dn/overlay/compressed``, when fuse published them) of that frame as ``DIR/overlay_Dn.png``.
 """
 
 import json
@@ -28,6 +35,11 @@ def add_parser(subparsers) -> None:
     p.add_argument('--frames', type=int, nargs=2, metavar=('FIRST', 'LAST'), help='frame range (inclusive)')
     p.add_argument('--threshold', type=float, default=0.5, help='detection match distance, m (default: 0.5)')
     p.add_argument('--gate', type=float, default=1.0, help='tracking match distance, m (default: 1.0)')
+    p.add_argument('--dataset', help='MATRIX folder of the sequence (annotated boxes): score /Dn/detections_2d')
+    p.add_argument('--iou', type=float, default=0.5, help='image-plane match threshold (default: 0.5)')
+    p.add_argument('--boxes-2d', help='with --dataset: write the recorded 2D boxes to this text file')
+    p.add_argument('--png-2d', help='with --dataset: draw the middle frame of every drone into this PNG')
+    p.add_argument('--overlays', help='with --dataset: write the recorded overlay images of that frame here')
     p.add_argument('--json', help='also write the metrics to this JSON file')
     p.add_argument('--png', help='also draw the tracks and the ground-truth trajectories into this PNG')
     p.set_defaults(func=run)
@@ -56,12 +68,47 @@ def run(args) -> int:
         print(f'frames without a TrackArray: {lost if lost else "none"}')
     if args.png:
         _draw(args.png, result, args.area or recording.area, args.recording)
+    image_plane = _image_plane(args, clock, recording) if args.dataset else None
     if args.json:
         Path(args.json).write_text(json.dumps({
             'detection': result.detection.as_dict(),
             'tracking': result.tracking.as_dict() if result.tracking else None,
-            'detections_source': result.detections_source, 'frames_without_tracks': lost}, indent=2))
+            'detections_source': result.detections_source, 'frames_without_tracks': lost,
+            'image_plane': image_plane}, indent=2))
     return 0
+
+
+def _image_plane(args, clock, recording) -> dict:
+    """Score, print, write and draw the recorded 2D boxes (module docstring); their JSON form."""
+    from matrix_core.datasets.open import open_dataset
+    from matrix_core.evaluation.image_plane import (annotated_boxes, draw_frame_png, ids_in_tracks,
+                                                    read_recorded_boxes)
+    from matrix_core.metrics.image_boxes import format_view_table, per_view_metrics, write_mot_boxes
+
+    if not Path(args.recording).is_dir():
+        raise ValueError('--dataset needs a recorder bag (the 2D boxes are not in MOT text)')
+    dataset = open_dataset(args.dataset)
+    pred = read_recorded_boxes(args.recording, clock)
+    if args.frames:
+        pred = pred.select((pred.frames >= args.frames[0]) & (pred.frames <= args.frames[1]))
+    frames = [k for k in range(len(dataset.frames)) if not args.frames or args.frames[0] <= k <= args.frames[1]]
+    gt = annotated_boxes(dataset, [dataset.frames[k] for k in frames], list(dataset.views), frames)
+    metrics = per_view_metrics(gt, pred, args.iou)
+    same_ids = ids_in_tracks(pred, recording.tracks) if recording.tracks is not None else float('nan')
+    print(f'image plane: recorded detections_2d of {len(set(pred.views.tolist()))} drones vs the annotated boxes '
+          f'of {args.dataset} (IoU >= {args.iou:g}); 2D ids that are /tracks ids of the frame: {100 * same_ids:.2f} %')
+    print(format_view_table(metrics))
+    if args.boxes_2d:
+        write_mot_boxes(args.boxes_2d, pred)
+    if args.png_2d and frames:
+        k = frames[len(frames) // 2]
+        draw_frame_png(args.png_2d, {v: dataset.load_image(v, dataset.frames[k]) for v in dataset.views}, pred, gt, k,
+                       f'live recording, frame {k}: detections_2d (id, colour) and annotated boxes (white)')
+        print(f'wrote {args.png_2d}')
+    if args.overlays and frames:
+        _write_overlays(args, clock, frames[len(frames) // 2])
+    return {'per_drone': {v: m.as_dict() for v, m in metrics.items()}, 'ids_in_tracks': same_ids,
+            'iou': args.iou}
 
 
 def _draw(path, result, area, name) -> None:
@@ -81,3 +128,16 @@ def _draw(path, result, area, name) -> None:
     save_trajectories_png(path, result.gt, tracks, BevGrid(*map(float, area)),
                           f'live recording {Path(name).name}: tracks vs ground truth')
     print(f'wrote {path}')
+
+
+def _write_overlays(args, clock, frame: int) -> None:
+    import cv2
+
+    from matrix_core.evaluation.image_plane import read_recorded_overlays
+
+    overlays = read_recorded_overlays(args.recording, clock, frame)
+    Path(args.overlays).mkdir(parents=True, exist_ok=True)
+    for view, image in overlays.items():
+        cv2.imwrite(str(Path(args.overlays) / f'overlay_{view}.png'), image)
+    print(f'wrote {len(overlays)} overlay images of frame {frame} to {args.overlays}/'
+          if overlays else f'no overlay images of frame {frame} in {args.recording} (fuse overlay off?)')

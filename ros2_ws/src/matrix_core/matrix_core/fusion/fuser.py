@@ -20,8 +20,9 @@ from matrix_core.tracking import BevDetections, BevTracker
 
 @dataclass(frozen=True)
 class TrackState:
-    """A confirmed track reported this frame: id, (2,) metres, (2,) m/s, score, frames since birth, and
-    consecutive misses (> 0 only for a coasting track reported at its prediction)."""
+    """A confirmed track reported this frame: id, (2,) metres, (2,) m/s, score, frames since birth,
+    consecutive misses (> 0 only for a coasting track reported at its prediction) and (2,) the position of
+    its detection this frame (``TrackOutput.detection_xy``)."""
 
     track_id: int
     xy: np.ndarray
@@ -29,6 +30,7 @@ class TrackState:
     score: float
     age: int
     misses: int = 0
+    detection_xy: np.ndarray = None
 
 
 @dataclass
@@ -184,7 +186,7 @@ class BevFuser:
         for t in self.tracker.update(dets):
             born = self._born.setdefault(t.track_id, self.frame_count)
             out.append(TrackState(int(t.track_id), t.xy, t.velocity, float(t.score), self.frame_count - born,
-                                  int(t.misses)))
+                                  int(t.misses), t.detection_xy))
         alive = {tr.track_id for tr in self.tracker.tracks if tr.confirmed}
         self._born = {k: v for k, v in self._born.items() if k in alive}
         return out

@@ -67,10 +67,16 @@ class BevPoints:
 
     def by_frame(self) -> dict:
         """frame -> row indices (file order), for every frame that has points."""
-        order = np.argsort(self.frames, kind='stable')
-        frames = self.frames[order]
-        cuts = np.flatnonzero(np.diff(frames)) + 1
-        return {int(frames[g[0]]): g for g in np.split(order, cuts) if len(g)} if len(order) else {}
+        return rows_by_frame(self.frames)
+
+
+def rows_by_frame(frames) -> dict:
+    """frame -> row indices (file order) of (N,) int ``frames``, for every frame that occurs."""
+    frames = np.asarray(frames).reshape(-1)
+    order = np.argsort(frames, kind='stable')
+    cuts = np.flatnonzero(np.diff(frames[order])) + 1
+    # key by the frame of each group's first ROW (not the sorted position): rows need not be in frame order
+    return {int(frames[g[0]]): g for g in np.split(order, cuts) if len(g)} if len(order) else {}
 
 
 def read_bev_points(path, with_ids: bool = None) -> BevPoints:

@@ -62,10 +62,15 @@ def _ratio(num: float, den: float) -> float:
     return float(num) / float(den) if den else float('nan')
 
 
-def tracking_metrics(gt: BevPoints, pred: BevPoints, gate: float = 1.0) -> TrackingMetrics:
+def tracking_metrics(gt: BevPoints, pred: BevPoints, gate: float = 1.0, costs=None) -> TrackingMetrics:
     """CLEAR MOT and ID metrics of the tracks ``pred`` against ``gt`` (both need ids).
 
     Rows of one frame are processed in file order (which only matters for exact ties).
+
+    Args:
+        costs: optional ``costs(gt_rows, pred_rows) -> (n, m)`` pair costs, NaN where a pair may not match,
+            for other kinds of objects with ``frames``, ``ids`` and ``by_frame()`` (image boxes:
+            ``metrics.image_boxes``); default: ground distances gated at ``gate``. MOTP is the mean cost.
     """
     if not gt.has_ids or not pred.has_ids:
         raise ValueError('tracking metrics need ids in both ground truth and predictions ("frame id x y")')
@@ -82,7 +87,7 @@ def tracking_metrics(gt: BevPoints, pred: BevPoints, gate: float = 1.0) -> Track
     for f in frames:
         g, p = gt_rows.get(f, empty), pred_rows.get(f, empty)
         oids, hids = gt.ids[g], pred.ids[p]
-        d = gated_distances(gt.xy[g], pred.xy[p], gate)
+        d = costs(g, p) if costs is not None else gated_distances(gt.xy[g], pred.xy[p], gate)
         for i, j in zip(*np.nonzero(np.isfinite(d))):
             key = (int(oids[i]), int(hids[j]))
             within_gate[key] = within_gate.get(key, 0) + 1

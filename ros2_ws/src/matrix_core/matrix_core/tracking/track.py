@@ -49,6 +49,7 @@ class Track:
         self.hits = 1           # matched frames in a row
         self.misses = 0         # unmatched frames in a row
         self.last_xy = mean[:2].copy()   # filtered position at the last match
+        self.detection_xy = mean[:2].copy()   # position of the last matched detection
 
     @property
     def confirmed(self) -> bool:

@@ -20,13 +20,16 @@ from matrix_core.tracking.track import BevDetections, Track
 @dataclass(frozen=True)
 class TrackOutput:
     """A confirmed track matched in the current frame: id, (2,) filtered position (m), (2,) velocity (m/s);
-    ``misses`` > 0 only for a coasting track reported at its prediction (``report_coasting``)."""
+    ``misses`` > 0 only for a coasting track reported at its prediction (``report_coasting``);
+    ``detection_xy`` (2,): the position of the detection matched this frame (the prediction when coasting),
+    where the person is now: the filtered ``xy`` lags behind it (image boxes use it)."""
 
     track_id: int
     xy: np.ndarray
     velocity: np.ndarray
     score: float
     misses: int = 0
+    detection_xy: np.ndarray = None
 
 
 class BevTracker:
@@ -68,6 +71,7 @@ class BevTracker:
             tr.mean, tr.cov = self.kf.update(tr.mean, tr.cov, dets.xy[j])
             tr.last_xy = tr.mean[:2].copy()
             tr.score = float(dets.scores[j])
+            tr.detection_xy = dets.xy[j].copy()
             tr.hits += 1
             tr.misses = 0
             if not tr.confirmed and tr.hits >= s.birth_hits:
@@ -92,5 +96,6 @@ class BevTracker:
             survivors.append(tr)
         self.tracks = survivors
         self._first_frame = False
-        return [TrackOutput(tr.track_id, tr.xy.copy(), tr.velocity.copy(), tr.score, tr.misses)
+        return [TrackOutput(tr.track_id, tr.xy.copy(), tr.velocity.copy(), tr.score, tr.misses,
+                            (tr.detection_xy if tr.misses == 0 else tr.xy).copy())
                 for tr in self.tracks if tr.confirmed and (id(tr) in hit or tr.misses <= s.report_coasting)]

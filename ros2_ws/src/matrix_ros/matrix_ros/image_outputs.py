@@ -1,0 +1,45 @@
+"""The fuse node's per-drone image outputs: ``<view>/detections_2d`` (matrix_msgs/Detection2DArray) and, with
+``overlay``, ``<view>/overlay/compressed`` (the image with the boxes and ids drawn). Boxes and cameras come
+from the core (``matrix_core.fusion.image_outputs``); stamp = the frame's, frame_id = the drone's optical
+frame (``topics.optical_frame``)."""
+
+from matrix_msgs.msg import Detection2DArray
+from sensor_msgs.msg import CompressedImage
+from std_msgs.msg import Header
+
+from matrix_core import topics
+from matrix_core.fusion.image_outputs import ViewCameras
+from matrix_core.message_fields import ConversionError, image_from_msg
+from matrix_ros import fusion_messages as out
+from matrix_ros.qos import publisher_qos
+
+
+class ImageOutputs:
+    """Publishers of every view's image outputs (none when ``detections_2d_topic`` is empty)."""
+
+    def __init__(self, node, settings):
+        s, self.node = settings, node
+        self.cameras = (ViewCameras.from_dataset(s, s.scene_dataset, s.views) if s.scene_dataset
+                        else ViewCameras(s))
+        qos = publisher_qos()
+        self.boxes = {v: node.create_publisher(Detection2DArray, s.topic(s.detections_2d_topic, v), qos)
+                      for v in s.views} if s.detections_2d_topic else {}
+        self.overlays = {v: node.create_publisher(CompressedImage, s.topic(s.overlay_topic, v), qos)
+                         for v in self.boxes} if s.overlay else {}
+        if self.boxes and s.input_kind == 'homography' and not self.cameras.intrinsics:
+            node.get_logger().warning('no detections_2d from homographies: scene_dataset (the intrinsics) is not set')
+
+    def publish(self, stamp, frame, tracks) -> None:
+        """Boxes of ``tracks`` in every view that has a camera this frame (a synchronised ``frame``)."""
+        if not self.boxes:
+            return
+        geometry = {v: frame.items.get(f'{v}/geometry') for v in self.boxes}
+        for view, boxes in self.cameras.frame_boxes(geometry, tracks).items():
+            header = Header(stamp=stamp, frame_id=topics.optical_frame(view))
+            self.boxes[view].publish(out.detections_2d_msg(header, boxes))
+            image = frame.items.get(f'{view}/image')
+            if view in self.overlays and image is not None:
+                try:
+                    self.overlays[view].publish(out.overlay_msg(header, image_from_msg(image), boxes))
+                except ConversionError as exc:
+                    self.node.get_logger().error(f'{view}: no overlay: {exc}')
