@@ -22,9 +22,8 @@ import json
 from pathlib import Path
 
 
-from matrix_core.datasets import matrix_conventions as conv
 from matrix_core.datasets.types import DatasetError
-from matrix_core.register.file_frame import registration_from_record
+from matrix_core.register.file_frame import record_name, registration_from_record
 
 
 def _from_cameras(camera_of):
@@ -93,7 +92,7 @@ def _registration(dataset, frames, calibration_dir):
     size = dataset.image_size
 
     def homography_of(view, frame):
-        f = path / 'registration' / f'Drone{conv.drone_number(view)}_{frame:04d}.json'
+        f = path / 'registration' / record_name(view, frame)
         if not f.is_file():
             return None
         registration = registration_from_record(json.loads(f.read_text()), str(f))
