@@ -11,7 +11,7 @@ that view and frame: the view is then masked for that frame, nothing is invented
     - ``pnp``: per-frame checkerboard PnP written by ``matrix-tracker calibrate DATASET --out DIR``
       (``DIR/calibrations`` + ``DIR/calibration_status.csv``); only frames with status ``ok`` are used;
     - ``pnp_stale``: the same, also using ``stale`` frames (the calibrator's last good pose, as the live
-      ``calib`` node republishes it);
+      ``calib`` node republishes it; written only by ``calibrate --write-stale``);
     - ``registration``: ``DIR/registration/Drone{N}_{TTTT}.json`` of ``matrix-tracker register DATASET
       --out DIR`` (read by ``register.file_frame``: the registration contract's file form);
       frames whose status is not ``ok`` are masked.
