@@ -11,7 +11,7 @@ that view and frame: the view is then masked for that frame, nothing is invented
     - ``pnp``: per-frame checkerboard PnP written by ``matrix-tracker calibrate DATASET --out DIR``
       (``DIR/calibrations`` + ``DIR/calibration_status.csv``); only frames with status ``ok`` are used;
     - ``pnp_stale``: the same, also using ``stale`` frames (the calibrator's last good pose, as the live
-      ``calib`` node republishes it);
+      ``calib`` node republishes it; written only by ``calibrate --write-stale``);
     - ``registration``: ``DIR/registration/Drone{N}_{TTTT}.json`` of ``matrix-tracker register DATASET
       --out DIR`` (read by ``register.file_frame``: the registration contract's file form);
       frames whose status is not ``ok`` are masked.
@@ -22,9 +22,8 @@ import json
 from pathlib import Path
 
 
-from matrix_core.datasets import matrix_conventions as conv
 from matrix_core.datasets.types import DatasetError
-from matrix_core.register.file_frame import registration_from_record
+from matrix_core.register.file_frame import record_name, registration_from_record
 
 
 def _from_cameras(camera_of):
@@ -93,7 +92,7 @@ def _registration(dataset, frames, calibration_dir):
     size = dataset.image_size
 
     def homography_of(view, frame):
-        f = path / 'registration' / f'Drone{conv.drone_number(view)}_{frame:04d}.json'
+        f = path / 'registration' / record_name(view, frame)
         if not f.is_file():
             return None
         registration = registration_from_record(json.loads(f.read_text()), str(f))

@@ -1,12 +1,25 @@
 """``matrix-tracker calibrate DATASET --out DIR``: per-frame checkerboard calibration of every drone.
 
-Calibrates every frame of every view of a MATRIX-format folder from its images alone (intrinsics and
-boards from ``--config``; the first frame's prior from ``DATASET/reference/calibrations`` when present,
-else from the config's ``initial_poses``). Writes ``DIR/calibrations/{intrinsic,extrinsic}/`` in the
-dataset's own file format and world frame (with links to the images in ``DIR/image_subsets``, so that
-``open_dataset(DIR)`` reads it like any MATRIX folder) and ``DIR/calibration_status.csv``.
-Frames that end stale are written with the last good pose (the table says so); failed ones are not written.
-:func:`simulated_sequence` makes a sequence to calibrate (the calibration's tests and benchmarks).
+Calibrates every frame of every view of a MATRIX-format folder (intrinsics and boards from ``--config``;
+the first frame's prior from ``DATASET/reference/calibrations`` when present, else from the config's
+``initial_poses``). Writes ``DIR/calibrations/{intrinsic,extrinsic}/`` in the dataset's own file format and
+world frame (with links to the images in ``DIR/image_subsets``, so that ``open_dataset(DIR)`` reads it like
+any MATRIX folder) and ``DIR/calibration_status.csv``.
+
+``--registration REG``: the ``--out`` folder of ``matrix-tracker register`` (``REG/registration/Drone{N}_{TTTT}.json``).
+Each frame is then calibrated as the live ``calib`` node with ``use_registration`` does: the camera its
+registration implies predicts the boards; a frame without a record, or whose registration failed or is not
+a rigid camera, is calibrated from the image motion (column ``guide`` says which).
+
+Only ``ok`` poses are written by default: a ``stale`` frame (no acceptable pose in its image; the calibrator
+holds its last good pose) is listed in the CSV but gets no calibration file, so that no MATRIX reader takes
+it for a measurement; ``--write-stale`` writes those last good poses too (column ``written``). Failed
+frames are never written.
+
+No frame ends the run: a frame whose image cannot be read or whose calibration raises (and every frame of a
+drone without a prior) is ``failed`` with the step in ``failure`` and the reason in ``message``; the summary
+counts them. :func:`simulated_sequence` makes a sequence to calibrate (the calibration's tests and
+benchmarks).
 """
 
 import csv
@@ -16,18 +29,20 @@ from pathlib import Path
 from tqdm import tqdm
 
 from matrix_core.cli.selection import add_selection_arguments
-from matrix_core.calib.drone_calibrator import OK, DroneCalibrator
+from matrix_core.calib.drone_calibrator import FAILED, OK, STALE, DroneCalibrator
 from matrix_core.calib.evaluation import pose_errors, summarize_errors
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.prior import initial_prior
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.cli.main import main as cli_main
 from matrix_core.datasets import DatasetError, MatrixDataset, MatrixWriter, open_dataset
+from matrix_core.register.file_frame import read_registration
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
 STATUS_FILE = 'calibration_status.csv'
-COLUMNS = ('view', 'frame', 'status', 'rms_px', 'corners', 'pieces_found', 'pieces_assigned', 'tracked', 'age_s',
-           'time_s', 'rot_err_deg', 'centre_err_m', 'message')
+COLUMNS = ('view', 'frame', 'status', 'written', 'rms_px', 'corners', 'pieces_found', 'pieces_assigned', 'tracked',
+           'age_s', 'time_s', 'rot_err_deg', 'centre_err_m', 'registration', 'guide', 'failure', 'message')
+NAN = float('nan')
 
 
 def add_parser(subparsers) -> None:
@@ -36,34 +51,110 @@ def add_parser(subparsers) -> None:
     add_selection_arguments(p, 'calibrate', 'MATRIX-format folder', 'output folder')
     p.add_argument('--frame-period', type=float, default=0.5, help='seconds between frames (for ages)')
     p.add_argument('--compare', action='store_true', help='print errors against the stored calibrations')
+    p.add_argument('--registration', metavar='REG', default=None,
+                   help='the --out folder of `matrix-tracker register` on this dataset: each frame\'s registration '
+                        'guides its calibration (as the live calib node with use_registration)')
+    p.add_argument('--write-stale', action='store_true',
+                   help='also write the last good pose of stale frames as calibration files (default: only ok '
+                        'frames; the CSV lists every frame)')
     add_settings_arguments(p, CalibSettings)
     p.set_defaults(func=run)
 
 
+def registration_folder(path) -> Path:
+    """``path/registration`` (the ``--out`` of ``matrix-tracker register``), or ``path`` itself when it holds
+    the records; :class:`DatasetError` when neither has any."""
+    path = Path(path)
+    for folder in (path / 'registration', path):
+        if folder.is_dir() and any(folder.glob('Drone*_*.json')):
+            return folder
+    raise DatasetError(f'{path}: no registration records (Drone*_*.json) in it or in its registration/ '
+                       f'(the --out folder of `matrix-tracker register`)')
+
+
+def _row(view, frame, status, message, failure='', result=None, registration='') -> dict:
+    """One row of the CSV; ``failure`` names the step that raised ('' when none did)."""
+    r = result
+    return {'view': view, 'frame': frame, 'status': status, 'written': False,
+            'rms_px': r.rms_px if r else NAN, 'corners': r.corners if r else 0,
+            'pieces_found': r.pieces_found if r else 0, 'pieces_assigned': r.pieces_assigned if r else 0,
+            'tracked': r.tracked if r else False, 'age_s': r.age_s if r else 0.0,
+            'time_s': r.timings_s.get('total', NAN) if r else NAN, 'rot_err_deg': NAN, 'centre_err_m': NAN,
+            'registration': registration, 'guide': r.motion if r else '', 'failure': failure, 'message': message}
+
+
+def _failure(step: str, exc: Exception) -> str:
+    return f'{step}: {type(exc).__name__}: {exc}'
+
+
+def _registration_of(registrations, view, frame) -> tuple:
+    """(Registration or None, what the CSV says of it): '' without ``--registration``, 'missing', or its
+    status (with the reason when not ok)."""
+    if registrations is None:
+        return None, ''
+    registration = read_registration(registrations, view, frame)
+    if registration is None:
+        return None, 'missing'
+    return registration, registration.status + (f': {registration.message}' if not registration.ok else '')
+
+
+def _calibrate_frame(dataset, out, writer, calibrator, view, frame, stamp, registrations, write_stale,
+                     compare) -> dict:
+    """Calibrate, write and measure one frame; a step that raises makes the frame failed (its row says which
+    and why) instead of ending the run."""
+    step = 'read image'
+    try:
+        image = dataset.load_image(view, frame)
+        step = 'registration'
+        registration, said = _registration_of(registrations, view, frame)
+        step = 'calibrate'
+        result = calibrator.process(image, stamp, registration)
+    except Exception as exc:  # one bad frame (unreadable image, wrong size, calibrator bug) must not end the batch
+        reason = _failure(step, exc)
+        return _row(view, frame, FAILED, reason, step, registration=said if step == 'calibrate' else '')
+    row = _row(view, frame, result.status, result.message, result=result, registration=said)
+    if result.camera is None:
+        return row
+    if compare:
+        try:
+            row['rot_err_deg'], row['centre_err_m'] = pose_errors(result.camera, dataset.camera(view, frame))
+        except Exception as exc:  # the pose stands; only its check against the stored calibration failed
+            row['failure'], row['message'] = 'compare', f'{row["message"]}; {_failure("compare", exc)}'
+    if result.status == OK or write_stale:
+        try:
+            writer.write_camera(view, frame, result.camera)
+            _link_image(dataset, out, view, frame)
+            row['written'] = True
+        except Exception as exc:
+            row['failure'], row['message'] = 'write', f'{row["message"]}; {_failure("write", exc)}'
+    return row
+
+
 def calibrate_dataset(dataset: MatrixDataset, out: Path, settings: CalibSettings, views=(), max_frames=0,
-                      frame_period=0.5, compare=False) -> list:
-    """Run the calibration over ``dataset``; returns the status rows (also written to the CSV)."""
+                      frame_period=0.5, compare=False, registration_dir=None, write_stale=False) -> list:
+    """Run the calibration over ``dataset``; returns the status rows (also written to the CSV).
+    ``registration_dir``: the ``--out`` folder of ``matrix-tracker register`` (see :func:`registration_folder`)
+    whose records guide the frames; ``write_stale``: write stale frames' last good poses too."""
     scene = load_scene(settings.config)
     views, frames = dataset.select_views(views), dataset.select_frames(max_frames)
+    registrations = None if registration_dir is None else registration_folder(registration_dir)
     writer = MatrixWriter(out, area=dataset.area, extra_meta={'calibrated_from': str(dataset.root)})
     rows = []
     with tqdm(total=len(views) * len(frames), desc='calibrate', unit='image') as bar:
         for view in views:
-            prior, prior_image = initial_prior(scene, view, dataset)
-            calibrator = DroneCalibrator(scene, settings, prior, prior_image)
+            try:
+                calibrator = DroneCalibrator(scene, settings, *initial_prior(scene, view, dataset))
+            except Exception as exc:  # one drone without a usable prior: its frames fail, the others run
+                reason = _failure('prior', exc)
+                tqdm.write(f'{view}: {reason}')
+                rows += [_row(view, frame, FAILED, reason, 'prior') for frame in frames]
+                bar.update(len(frames))
+                continue
             for index, frame in enumerate(frames):
-                result = calibrator.process(dataset.load_image(view, frame), index * frame_period)
-                row = {'view': view, 'frame': frame, 'status': result.status, 'rms_px': result.rms_px,
-                       'corners': result.corners, 'pieces_found': result.pieces_found,
-                       'pieces_assigned': result.pieces_assigned, 'tracked': result.tracked, 'age_s': result.age_s,
-                       'time_s': result.timings_s.get('total', float('nan')), 'rot_err_deg': float('nan'),
-                       'centre_err_m': float('nan'), 'message': result.message}
-                if result.camera is not None:
-                    writer.write_camera(view, frame, result.camera)
-                    _link_image(dataset, out, view, frame)
-                    if compare:
-                        row['rot_err_deg'], row['centre_err_m'] = pose_errors(result.camera,
-                                                                              dataset.camera(view, frame))
+                row = _calibrate_frame(dataset, out, writer, calibrator, view, frame, index * frame_period,
+                                       registrations, write_stale, compare)
+                if row['failure']:
+                    tqdm.write(f'{view} frame {frame}: {row["message"]}')
                 rows.append(row)
                 bar.update(1)
     with open(out / STATUS_FILE, 'w', newline='') as fh:
@@ -99,10 +190,18 @@ def run(args) -> int:
         raise DatasetError(f'{args.dataset} is a {dataset.format_name} folder; calibrate needs MATRIX format')
     out = Path(args.out)
     rows = calibrate_dataset(dataset, out, settings, args.views, args.max_frames, args.frame_period,
-                             args.compare)
+                             args.compare, args.registration, args.write_stale)
+    counts = {k: sum(r['status'] == k for r in rows) for k in (OK, STALE, FAILED)}
+    raised = sum(bool(r['failure']) for r in rows)
+    written = sum(r['written'] for r in rows)
+    stale_kept = sum(r['status'] == STALE and not r['written'] for r in rows)
+    guided = sum(r['guide'] == 'registration' for r in rows)
+    print(f'{len(rows)} images: {counts}; {raised} raised (step in the CSV\'s "failure"); wrote {written} '
+          f'calibration(s) to {out / "calibrations"}'
+          + (f' ({stale_kept} stale not written: --write-stale writes them)' if stale_kept else '')
+          + (f'; {guided} guided by their registration' if args.registration else '')
+          + f'; table {out / STATUS_FILE}')
     s = summarize_errors(rows) if args.compare else None
-    counts = {k: sum(r['status'] == k for r in rows) for k in (OK, 'stale', 'failed')}
-    print(f'{len(rows)} images: {counts}; wrote {out / "calibrations"} and {out / STATUS_FILE}')
     if s and s['ok']:
         print(f"vs stored calibration (ok frames): rotation median {s['rot_median_deg']:.3f} deg, "
               f"max {s['rot_max_deg']:.3f} deg; centre median {s['centre_median_m']:.3f} m, "

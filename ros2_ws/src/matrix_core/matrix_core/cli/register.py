@@ -30,10 +30,9 @@ from tqdm import tqdm
 
 from matrix_core.cli.selection import add_selection_arguments
 from matrix_core.datasets import DatasetError, MatrixDataset, open_dataset
-from matrix_core.datasets import matrix_conventions as conv
 from matrix_core.register.backends import make_backend
 from matrix_core.register.evaluate import homography_error_px
-from matrix_core.register.file_frame import registration_to_record
+from matrix_core.register.file_frame import record_name, registration_to_record
 from matrix_core.register.overlay import write_registration_overlay
 from matrix_core.register.registrar import Registrar
 from matrix_core.register.registration import STATUS_FAILED, Registration
@@ -77,7 +76,7 @@ def _pair(view, frame, status, message, failure='', error=None, result=None) -> 
 def _register_frame(args, dataset, settings, view, frame, index, registrar, image, ref_cam, out) -> dict:
     """Register, write, measure and draw one frame; any step that raises makes the frame failed (its pair
     says which step and why) instead of ending the run."""
-    name = f'Drone{conv.drone_number(view)}_{frame:04d}.json'
+    name = record_name(view, frame)
     try:
         current = dataset.load_image(view, frame)
         result = registrar.register(current, frame)

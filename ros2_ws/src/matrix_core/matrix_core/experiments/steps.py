@@ -57,8 +57,9 @@ def scaled_calib_config(variant: str, width: int, height: int, path: Path) -> Pa
 def run_calibrate(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
     out.mkdir(parents=True, exist_ok=True)
     config = scaled_calib_config(p['variant'], *p['image_size'], out / 'calib_scene.yaml')
-    _cli(['calibrate', str(run_dir / p['dataset']), '--out', str(out), '--config', str(config), '--compare'],
-         out, 'calibrate.log')
+    # --write-stale: the pnp_stale source uses the stale frames' last good poses (as the live node republishes them)
+    _cli(['calibrate', str(run_dir / p['dataset']), '--out', str(out), '--config', str(config), '--compare',
+          '--write-stale'], out, 'calibrate.log')
 
 
 def run_register(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:

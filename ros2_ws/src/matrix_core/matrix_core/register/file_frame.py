@@ -10,10 +10,19 @@ null when the registration failed. The point conversions live in
 re-express a homography.
 """
 
+import json
+from pathlib import Path
+
 import numpy as np
 
 from matrix_core.datasets import matrix_conventions as conv
 from matrix_core.register.registration import STATUS_OK, Registration, RegistrationError, check_homography
+
+
+def record_name(view: str, frame: int) -> str:
+    """File name of the record of drone ``view`` ('D3') and ``frame`` in ``DIR/registration/``:
+    'Drone3_0017.json'."""
+    return f'Drone{conv.drone_number(view)}_{frame:04d}.json'
 
 
 def _affine_of(fn) -> np.ndarray:
@@ -60,3 +69,21 @@ def registration_from_record(record: dict, where: str = 'record') -> Registratio
     except (RegistrationError, TypeError) as exc:
         return Registration.failed(f'unusable record: {exc}', **values)
     return Registration(STATUS_OK, _normalised(ref), _normalised(ground), message=record.get('message', ''), **values)
+
+
+def read_registration(folder, view: str, frame: int):
+    """The Registration of ``view`` and ``frame`` recorded in ``folder`` (``DIR/registration``), or None
+    when there is no file. A file that cannot be read or parsed comes back failed, saying why."""
+    path = Path(folder) / record_name(view, frame)
+    if not path.is_file():
+        return None
+    try:
+        record = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        return Registration.failed(f'{path}: unreadable record: {exc}')
+    if not isinstance(record, dict):
+        return Registration.failed(f'{path}: unreadable record: not a JSON object')
+    try:
+        return registration_from_record(record, str(path))
+    except (TypeError, ValueError) as exc:   # e.g. a number field holding text
+        return Registration.failed(f'{path}: unreadable record: {exc}')
