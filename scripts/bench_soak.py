@@ -63,6 +63,8 @@ def report(probe: Probe, samples: list, frames: int, out: Path) -> tuple:
     print(f'\nframes played / with tracks / in the bag: {len(stamps)} / {len(stamps) - len(lost)} / {frames}'
           + (f'  (lost: {lost[:10]}{" ..." if len(lost) > 10 else ""})' if lost else '  (no frame lost)'))
     if len(lat):
+        span = max(probe.tracks.values()) - min(probe.first_image.values())
+        print(f'sustained rate (lockstep): {len(lat) / span:.2f} frames/s')
         tenth = max(1, len(lat) // 10)
         first, last = lat[:tenth], lat[-tenth:]
         print(f'latency first image -> tracks: first {tenth} frames median {np.median(first):.2f} s '
