@@ -5,14 +5,15 @@ IN_ENV := source scripts/env.sh &&
 # Where the experiments write their report (its PNGs go to images/results/ beside it); CI writes elsewhere.
 RESULTS ?= docs/RESULTS.md
 
-.PHONY: help setup build test test-fast demo bench clean experiments experiments-quick
+.PHONY: help setup build data test test-fast demo bench clean experiments experiments-quick
 
 help:
 	@echo "make setup  - create .venv (pinned), colcon build ros2_ws, install offline weights (idempotent)"
 	@echo "make test   - run every test (unit, integration, ROS 2 over DDS, system)"
 	@echo "make test-fast - every test but the DDS (ros), system and slow ones (under 3 minutes)"
+	@echo "make data   - check ../shared (MATRIX_SHARED), else fetch the public MATRIX sample, else say what to put where"
 	@echo "make demo   - replay the real MATRIX sample through ROS 2 and write pictures to out/demo"
-	@echo "make bench  - print the speed figures of every component (scripts/bench_*.py)"
+	@echo "make bench  - print the speed figures of every component (scripts/bench_*.py but the soak)"
 	@echo "make build  - colcon build only"
 	@echo "make experiments       - the paper's experiments at full size (hours) -> \$$RESULTS (docs/RESULTS.md) + PNGs"
 	@echo "make experiments-quick - the same as a smoke test (a few minutes; numbers meaningless), e.g. RESULTS=out/quick/RESULTS.md"
@@ -23,18 +24,27 @@ setup:
 build:
 	bash scripts/build.sh
 
-test: setup
+data:
+	bash scripts/data.sh
+
+# test and demo fail early, before setup, when their data is missing (the message of `make data`).
+test:
+	bash scripts/data.sh --require matrix_sample,multiviewx_sample
+	$(MAKE) setup
 	$(IN_ENV) python -m pytest
 
 # No setup: for the edit-test loop of a machine already set up (system tests are all marked ros and slow).
 test-fast:
 	$(IN_ENV) python -m pytest -m "not ros and not slow"
 
-demo: setup
+demo:
+	bash scripts/data.sh --require matrix_sample
+	$(MAKE) setup
 	$(IN_ENV) bash scripts/demo.sh
 
 bench: setup
-	$(IN_ENV) for b in scripts/bench_*.py; do echo "== $$b"; python "$$b" || exit 1; done
+	$(IN_ENV) for b in scripts/bench_*.py; do [ "$$b" = scripts/bench_soak.py ] && continue; \
+	  echo "== $$b"; python "$$b" || exit 1; done   # the soak (45 min): python scripts/bench_soak.py
 
 experiments: setup
 	$(IN_ENV) matrix-tracker experiments --mode full --out out/experiments --report $(RESULTS)

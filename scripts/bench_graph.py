@@ -40,10 +40,10 @@ ROOT = Path(__file__).resolve().parent.parent
 CHECKPOINT = ROOT / 'ros2_ws/src/matrix_core/matrix_core/bev/checkpoints/complex.pt'
 
 
-def simulated_sequence(out: Path, frames: int) -> tuple:
+def simulated_sequence(out: Path, frames: int, seed: int = 11) -> tuple:
     """(bag, dataset) of a seeded complex-variant sequence at 1920x1080, made once."""
     if not (out / 'bag' / 'metadata.yaml').is_file():
-        subprocess.run(['matrix-tracker', 'simulate', '--config', 'complex', '--frames', str(frames), '--seed', '11',
+        subprocess.run(['matrix-tracker', 'simulate', '--config', 'complex', '--frames', str(frames), '--seed', str(seed),
                         '--image_ext', '.jpg', '--bag', '--compressed', '--out', str(out)], check=True)
     return out / 'bag', out
 
