@@ -10,5 +10,8 @@ export AMENT_PREFIX_PATH="$VENV" CMAKE_PREFIX_PATH="$VENV"
 bash scripts/fix_ros_wheel_paths.sh
 bash scripts/build_cli.sh
 cd ros2_ws
+# A file removed from the sources leaves a dangling symlink in a --symlink-install build, which colcon then
+# fails to copy: drop those, so that an existing checkout builds after a pull.
+[ -d build ] && find build -xtype l -delete
 colcon --log-base log build --symlink-install --base-paths src --build-base build --install-base install \
   --event-handlers console_direct- console_cohesion- summary+ status- 2>&1 | tail -n 5
