@@ -17,6 +17,9 @@ def add_parser(subparsers) -> None:
     p.add_argument('--export', metavar='PATH', help='after training, write last.pt without the optimizer state '
                    'to PATH (how the shipped checkpoints/*.pt are made; with --resume on a finished run it '
                    'only exports)')
+    p.add_argument('--export-from', choices=('last', 'best'), default='last',
+                   help='which checkpoint --export writes: the last epoch, or best.pt (highest mean validation '
+                        'MODA: the model-selection protocol of the shipped default, README "Model selection")')
     p.set_defaults(func=run)
 
 
@@ -36,7 +39,12 @@ def run(args) -> int:
         from matrix_core.bev.checkpoint import export_checkpoint
 
         cfg = resolve_config_path(args.config)
-        path = export_checkpoint(out / 'last.pt', args.export,
-                                 trained_with=f'configs/{cfg.name}' if cfg.parent == CONFIG_DIR else str(cfg))
+        source = out / f'{args.export_from}.pt'
+        if not source.is_file():
+            raise FileNotFoundError(f'--export-from {args.export_from}: {source} was not written '
+                                    '(best.pt needs validation sequences in the config)')
+        recipe = f'configs/{cfg.name}' if cfg.parent == CONFIG_DIR else str(cfg)
+        path = export_checkpoint(source, args.export, trained_with=f'{recipe} --seed {config.seed} '
+                                 f'({args.export_from}.pt)')
         print(f'exported {path} ({path.stat().st_size / 1e6:.1f} MB)')
     return 0

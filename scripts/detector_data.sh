@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Simulate the sequences of the default detector's recipe (bev/configs/detector.yaml names the same commands):
+# training (seeds 101-103), validation (111, 112) and held-out test (201, 202) sequences into data/.
+# Complete folders are kept, partial ones regenerated. Usage: bash scripts/detector_data.sh [train|val|test ...]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/env.sh
+sets=("$@"); [ ${#sets[@]} -eq 0 ] && sets=(train val test)
+sim() {  # variant frames seed name
+  local out="data/det_$4"
+  local last; last=$(printf '%04d' $(($2 - 1)))
+  if [ -f "$out/annotations_positions/$last.json" ]; then echo "kept $out (complete)"; return; fi
+  rm -rf "$out"
+  matrix-tracker simulate --config "$1" --frames "$2" --seed "$3" --out "$out" --fast true --image_ext .jpg
+}
+for s in "${sets[@]}"; do
+  case "$s" in
+    train) sim complex 250 101 complex_train_s101; sim complex 250 102 complex_train_s102
+           sim modified 200 103 modified_train_s103 ;;
+    val)   sim complex 30 111 complex_val_s111; sim modified 30 112 modified_val_s112 ;;
+    test)  sim complex 60 201 complex_test_s201; sim modified 60 202 modified_test_s202 ;;
+    *) echo "unknown set $s (train, val, test)" >&2; exit 2 ;;
+  esac
+done
