@@ -156,3 +156,22 @@ def test_cost_per_view_is_a_few_ms(size):
     ms = (time.perf_counter() - start) / n * 1e3
     print(f'{size[0]}x{size[1]}: {ms:.2f} ms per view, everything on')
     assert ms < 40.0      # generous: the machine running the tests is shared
+
+
+def test_training_step_with_augmentation(matrix_sample):
+    """Augmented training samples (current and previous frame) go through the model; same seed, same loss."""
+    from matrix_core.bev.registry import build_model
+    from matrix_core.bev.training import open_sequences, training_step
+
+    torch.set_num_threads(1)
+    bev = BevSettings(model='bev_tiny', image_width=160, image_height=96, cell_m=0.5)
+    config = TrainConfig(train=[SequenceSpec(str(matrix_sample), frames=[1, 2])], bev=bev,
+                         augment=AugmentConfig(enabled=True, p_scale_crop=1, p_photometric=1))
+    train_seq, val_seq = open_sequences(config.train, config, training=True), open_sequences(config.train, config)
+    assert train_seq[0].augment is config.augment and val_seq[0].augment is None
+    torch.manual_seed(0)
+    model = build_model('bev_tiny').eval()
+    with torch.no_grad():
+        a, b = (training_step(model, train_seq, [(0, 1)], config, np.random.default_rng(4))['total'] for _ in '12')
+        clean = training_step(model, val_seq, [(0, 1)], config, np.random.default_rng(4))['total']
+    assert torch.isfinite(a) and float(a) == float(b) and float(a) != float(clean)
