@@ -56,7 +56,9 @@ def test_scale_crop_keeps_foot_points_on_their_cells_and_content(matrix_sample):
         np.testing.assert_allclose(p_clean, cam_input, atol=0.05)
         # where the augmented homography puts the feet in the augmented image
         p_aug = apply_homography(input_H_feat @ H_aug, cells)
-        inside = ((p_aug >= 1) & (p_aug <= (w - 2, h - 2))).all(1) & ((p_clean >= 1) & (p_clean <= (w - 2, h - 2))).all(1)
+        inside = np.ones(len(cells), bool)
+        for p in (p_aug, p_clean):
+            inside &= ((p >= 1) & (p <= (w - 2, h - 2))).all(1)
         if not inside.any():
             continue
         # ... lifts back to the foot's own BEV cell through the inverse of the new feat_H_grid

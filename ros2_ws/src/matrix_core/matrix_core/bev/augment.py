@@ -66,7 +66,7 @@ def _around_one(rng: np.random.Generator, amount: float) -> float:
 def photometric(rgb: np.ndarray, config: AugmentConfig, rng: np.random.Generator) -> np.ndarray:
     """(h, w, 3) uint8 RGB -> same: gamma, white balance, brightness, contrast, saturation, hue, greyscale.
 
-    Pointwise per channel, so it runs as look-up tables (a float pass over the image costs ~10x more).
+    Pointwise per channel, so it runs as look-up tables (float passes over the image cost about 6x more).
     """
     g = np.exp(rng.uniform(-1.0, 1.0) * np.log1p(config.gamma))
     gains = np.array([_around_one(rng, config.channel_gain) for _ in range(3)]) * _around_one(rng, config.brightness)

@@ -43,10 +43,11 @@ def ground_truth_positions(dataset, frame: int) -> dict:
 class BevFrames(torch.utils.data.Dataset):
     """Frames of one MATRIX folder as network inputs plus targets.
 
-    Item ``k`` (``data[k]`` or ``data.sample(k, rng)``) is a dict: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3) float32, ``view_mask`` (V,) bool,
-    the target arrays of :func:`bev_targets`, ``frame`` int, and ``prev_frame`` (the previous frame of the
-    sequence, -1 for the first). Views missing in ``views``, and views the calibration source has no
-    homography for in a frame (PnP failed, registration failed), are masked out for that frame.
+    Item ``k`` (``data[k]``, or ``data.sample(k, rng)`` augmented) is a dict: ``images`` (V, 3, h, w),
+    ``feat_H_grid`` (V, 3, 3) float32, ``view_mask`` (V,) bool, the target arrays of :func:`bev_targets`,
+    ``frame`` int, and ``prev_frame`` (the previous frame of the sequence, -1 for the first). Views missing
+    in ``views``, and views the calibration source has no homography for in a frame (PnP failed,
+    registration failed), are masked out for that frame.
 
     Args:
         root: MATRIX folder.
