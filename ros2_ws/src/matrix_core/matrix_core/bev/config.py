@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 
+from matrix_core.bev.augment import AugmentConfig
 from matrix_core.bev.settings import BevSettings
 from matrix_core.settings import read_yaml
 from matrix_core.tracking.settings import TrackerSettings
@@ -47,6 +48,7 @@ class TrainConfig:
     # 0.25 m cells: L1 0.061 m after 60 steps vs 0.030 m with weight 10), i.e. never in a short run.
     loss_weights: dict = field(default_factory=lambda: {'heatmap': 1.0, 'offset': 10.0, 'tracking': 2.0})
     view_dropout: float = 0.15     # probability of dropping each view in a training sample
+    augment: AugmentConfig = field(default_factory=AugmentConfig)   # training images only; off by default
     min_views: int = 4
     seed: int = 0
     num_threads: int = 1
@@ -94,6 +96,7 @@ def load_config(name_or_path, overrides: dict = None) -> TrainConfig:
         raw['val'] = [SequenceSpec(**s) for s in raw.get('val') or []]
         raw['bev'] = BevSettings(**(raw.get('bev') or {}))
         raw['tracker'] = TrackerSettings(**(raw.get('tracker') or {}))
+        raw['augment'] = AugmentConfig(**(raw.get('augment') or {}))
         return TrainConfig(**raw)
     except TypeError as exc:
         raise ValueError(f'{path}: {exc}') from None

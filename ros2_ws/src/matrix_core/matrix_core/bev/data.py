@@ -4,6 +4,7 @@ import cv2
 import numpy as np
 import torch
 
+from matrix_core.bev.augment import AugmentConfig, augment_feat_H_grid, augment_view
 from matrix_core.bev.calibration_sources import calibration_source
 from matrix_core.bev.encoder import SmallEncoder
 from matrix_core.bev.lifting import feat_H_grid
@@ -13,6 +14,7 @@ from matrix_core.datasets import open_dataset
 
 MEAN = np.array([0.485, 0.456, 0.406], np.float32)
 STD = np.array([0.229, 0.224, 0.225], np.float32)
+PAD_RGB = tuple(float(c) for c in MEAN * 255.0)     # augmentation padding: zero after normalise_rgb
 
 
 def resize_rgb(bgr: np.ndarray, size: tuple) -> np.ndarray:
@@ -41,10 +43,11 @@ def ground_truth_positions(dataset, frame: int) -> dict:
 class BevFrames(torch.utils.data.Dataset):
     """Frames of one MATRIX folder as network inputs plus targets.
 
-    Item ``k`` is a dict: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3) float32, ``view_mask`` (V,) bool,
-    the target arrays of :func:`bev_targets`, ``frame`` int, and ``prev_frame`` (the previous frame of the
-    sequence, -1 for the first). Views missing in ``views``, and views the calibration source has no
-    homography for in a frame (PnP failed, registration failed), are masked out for that frame.
+    Item ``k`` (``data[k]``, or ``data.sample(k, rng)`` augmented) is a dict: ``images`` (V, 3, h, w),
+    ``feat_H_grid`` (V, 3, 3) float32, ``view_mask`` (V,) bool, the target arrays of :func:`bev_targets`,
+    ``frame`` int, and ``prev_frame`` (the previous frame of the sequence, -1 for the first). Views missing
+    in ``views``, and views the calibration source has no homography for in a frame (PnP failed,
+    registration failed), are masked out for that frame.
 
     Args:
         root: MATRIX folder.
@@ -55,10 +58,13 @@ class BevFrames(torch.utils.data.Dataset):
         cache_images: keep resized images in memory (uint8; about 0.4 MB per view and frame at 480x272).
         calibration_dir: output folder of ``matrix-tracker calibrate``/``register`` for the ``pnp``/
             ``registration`` sources.
+        augment: :class:`AugmentConfig` of a TRAINING sequence; images are augmented (after the cache,
+            which keeps the clean resized images) only when it is enabled AND a generator is passed to
+            :meth:`sample`/:meth:`inputs`, so ``data[k]`` and evaluation are never augmented.
     """
 
     def __init__(self, root, settings: BevSettings, frames=None, calibration: str = 'ground_truth', views=None,
-                 cache_images: bool = True, calibration_dir=None):
+                 cache_images: bool = True, calibration_dir=None, augment: AugmentConfig = None):
         self.dataset = open_dataset(root)
         self.settings = settings
         self.frames = tuple(frames) if frames is not None else tuple(self.dataset.frames)
@@ -73,18 +79,24 @@ class BevFrames(torch.utils.data.Dataset):
         self.input_size = (settings.image_width, settings.image_height)
         self._cache = {} if cache_images else None
         self.stride = SmallEncoder.stride  # input pixels per feature pixel, as BevFusionNet.stride
+        self.augment = augment if augment is not None and augment.enabled else None
 
     def __len__(self) -> int:
         return len(self.frames)
 
-    def image(self, view: str, frame: int) -> np.ndarray:
+    def rgb(self, view: str, frame: int) -> np.ndarray:
+        """(h, w, 3) uint8 RGB of one view at the input size (cached when ``cache_images``)."""
         key = (view, frame)
         if self._cache is not None and key in self._cache:
-            return normalise_rgb(self._cache[key])
+            return self._cache[key]
         rgb = resize_rgb(self.dataset.load_image(view, frame), self.input_size)
         if self._cache is not None:
             self._cache[key] = rgb      # uint8: a quarter of the memory of the float input
-        return normalise_rgb(rgb)
+        return rgb
+
+    def image(self, view: str, frame: int) -> np.ndarray:
+        """(3, h, w) float32 normalised network input of one view."""
+        return normalise_rgb(self.rgb(view, frame))
 
     def homographies(self, frame: int) -> np.ndarray:
         """(V, 3, 3) float32 ``feat_H_grid`` of every view at ``frame`` (zeros where the source has none)."""
@@ -101,22 +113,34 @@ class BevFrames(torch.utils.data.Dataset):
                        feat_H_grid(h[0], self.grid.ground_H_grid, h[1], self.input_size, self.stride))
         return np.stack(out).astype(np.float32), np.array(available, dtype=bool)
 
-    def inputs(self, frame: int) -> dict:
-        """Network inputs of one frame: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3), ``view_mask`` (V,)."""
+    def inputs(self, frame: int, rng: np.random.Generator = None) -> dict:
+        """Network inputs of one frame: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3), ``view_mask`` (V,).
+        With ``rng`` and an enabled ``augment``, each view is augmented independently and its
+        ``feat_H_grid`` follows its scale-and-crop."""
         H, available = self.homographies_and_availability(frame)
         mask = np.array([v in self.use_views for v in self.views]) & available
         images = np.zeros((len(self.views), 3, self.input_size[1], self.input_size[0]), np.float32)
+        augment = self.augment if rng is not None else None
         for i, v in enumerate(self.views):
-            if mask[i]:
-                images[i] = self.image(v, frame)
+            if not mask[i]:
+                continue
+            rgb = self.rgb(v, frame)
+            if augment is not None:
+                rgb, aug_H_input = augment_view(rgb, augment, rng, PAD_RGB)
+                H[i] = augment_feat_H_grid(H[i].astype(np.float64), aug_H_input, self.stride)
+            images[i] = normalise_rgb(rgb)
         return {'images': torch.from_numpy(images), 'feat_H_grid': torch.from_numpy(H),
                 'view_mask': torch.from_numpy(mask)}
 
     def __getitem__(self, k: int) -> dict:
+        return self.sample(k)
+
+    def sample(self, k: int, rng: np.random.Generator = None) -> dict:
+        """Item ``k``; augmented with ``rng`` when ``augment`` is enabled (see :meth:`inputs`)."""
         frame = self.frames[k]
         prev = self.frames[k - 1] if k > 0 else -1
         pos = ground_truth_positions(self.dataset, frame)
         prev_pos = ground_truth_positions(self.dataset, prev) if prev >= 0 else None
         targets = bev_targets(self.grid, pos, prev_pos, self.settings.heatmap_sigma_m)
-        return {**self.inputs(frame), 'frame': frame, 'prev_frame': prev,
+        return {**self.inputs(frame, rng), 'frame': frame, 'prev_frame': prev,
                 **{name: torch.from_numpy(arr) for name, arr in targets.items()}}

@@ -26,17 +26,20 @@ def seed_everything(seed: int) -> None:
     torch.manual_seed(seed)
 
 
-def open_sequences(specs: list, config: TrainConfig) -> list:
-    """A :class:`BevFrames` per sequence spec (paths may use ``$MATRIX_SHARED`` and ``~``)."""
+def open_sequences(specs: list, config: TrainConfig, training: bool = False) -> list:
+    """A :class:`BevFrames` per sequence spec (paths may use ``$MATRIX_SHARED`` and ``~``); ``training``
+    sequences get ``config.augment`` (validation is never augmented)."""
+    augment = config.augment if training else None
     out = []
     for spec in specs:
         path = Path(os.path.expanduser(os.path.expandvars(spec.path)))
         cdir = os.path.expanduser(os.path.expandvars(spec.calibration_dir)) if spec.calibration_dir else None
         probe = BevFrames(path, config.bev, calibration=spec.calibration, views=spec.views,
-                          cache_images=config.cache_images, calibration_dir=cdir)
+                          cache_images=config.cache_images, calibration_dir=cdir, augment=augment)
         frames = spec.frame_list(probe.frames)
         out.append(probe if frames == list(probe.frames) else
-                   BevFrames(path, config.bev, frames, spec.calibration, spec.views, config.cache_images, cdir))
+                   BevFrames(path, config.bev, frames, spec.calibration, spec.views, config.cache_images, cdir,
+                             augment))
     return out
 
 
@@ -48,6 +51,14 @@ def drop_views(mask: torch.Tensor, p: float, min_views: int, rng: np.random.Gene
     out = mask.clone()
     out[torch.as_tensor(drop, dtype=torch.long)] = False
     return out
+
+
+def augment_rng(seq: BevFrames, rng: np.random.Generator):
+    """A generator of its own for one sample's augmentation, drawn from the epoch's ``rng`` (seeded runs
+    stay deterministic, and the number of draws an augmentation makes does not shift the view dropout);
+    None, without touching ``rng``, when the sequence is not augmented (runs then match those before
+    augmentation existed)."""
+    return None if seq.augment is None else np.random.default_rng(rng.integers(2 ** 63))
 
 
 def learning_rate(config: TrainConfig, step: int, total_steps: int) -> float:
@@ -70,13 +81,13 @@ def training_step(model, sequences, picks, config: TrainConfig, rng) -> dict:
     items, prev_inputs, prev_valid = [], [], []
     for si, k in picks:
         seq = sequences[si]
-        item = seq[k]
+        item = seq.sample(k, augment_rng(seq, rng))
         item['view_mask'] = drop_views(item['view_mask'], config.view_dropout, config.min_views, rng)
         items.append(item)
         has_prev = k > 0
         prev_valid.append(has_prev)
         if config.bev.temporal:
-            x = seq.inputs(seq.frames[k - 1] if has_prev else seq.frames[k])
+            x = seq.inputs(seq.frames[k - 1] if has_prev else seq.frames[k], augment_rng(seq, rng))
             x['view_mask'] = drop_views(x['view_mask'], config.view_dropout, config.min_views, rng)
             prev_inputs.append(x)
     batch = _batch(items)
@@ -103,7 +114,7 @@ def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: boo
     out_dir.mkdir(parents=True, exist_ok=True)
     torch.set_num_threads(config.num_threads)
     seed_everything(config.seed)
-    sequences = open_sequences(config.train, config)
+    sequences = open_sequences(config.train, config, training=True)
     shapes = {s.grid.shape for s in sequences}
     if len(shapes) != 1:
         raise ValueError(f'training sequences have different BEV grids {shapes}: set bev.area in the config')
