@@ -1,13 +1,12 @@
 """Training augmentation: the scale-and-crop keeps each annotated foot point on its BEV cell and on the same
 image content; photometric changes keep the geometry; seeded runs repeat; disabled changes nothing."""
 
-import time
 
 import numpy as np
 import pytest
 import torch
 
-from matrix_core.bev.augment import AugmentConfig, augment_view, photometric
+from matrix_core.bev.augment import AugmentConfig, photometric
 from matrix_core.bev.config import SequenceSpec, TrainConfig, load_config
 from matrix_core.bev.data import MEAN, PAD_RGB, STD, BevFrames, ground_truth_positions
 from matrix_core.bev.settings import BevSettings
@@ -142,22 +141,6 @@ def test_augment_config_in_the_training_yaml(tmp_path):
         AugmentConfig(p_noise=1.5)
     with pytest.raises(ValueError, match='zoom'):
         AugmentConfig(zoom=[1.2, 0.9])
-
-
-@pytest.mark.parametrize('size', [(320, 176), (480, 272)])
-def test_cost_per_view_is_a_few_ms(size):
-    """Everything on at once (the worst case): a few ms per view, small next to a training step."""
-    rng = np.random.default_rng(0)
-    rgb = rng.integers(0, 256, (size[1], size[0], 3), dtype=np.uint8)
-    config = AugmentConfig(enabled=True, p_photometric=1, p_blur=1, p_noise=1, p_jpeg=1, p_scale_crop=1)
-    augment_view(rgb, config, rng, PAD_RGB)
-    n = 20
-    start = time.perf_counter()
-    for _ in range(n):
-        augment_view(rgb, config, rng, PAD_RGB)
-    ms = (time.perf_counter() - start) / n * 1e3
-    print(f'{size[0]}x{size[1]}: {ms:.2f} ms per view, everything on')
-    assert ms < 40.0      # generous: the machine running the tests is shared
 
 
 def test_training_step_with_augmentation(matrix_sample):
