@@ -15,8 +15,8 @@ sim() {  # variant frames seed name
 }
 for s in "${sets[@]}"; do
   case "$s" in
-    train) sim complex 250 101 complex_train_s101; sim complex 250 102 complex_train_s102
-           sim modified 200 103 modified_train_s103 ;;
+    train) sim complex 250 101 complex_train_s101; sim complex 200 102 complex_train_s102
+           sim modified 150 103 modified_train_s103 ;;
     val)   sim complex 30 111 complex_val_s111; sim modified 30 112 modified_val_s112 ;;
     test)  sim complex 60 201 complex_test_s201; sim modified 60 202 modified_test_s202 ;;
     *) echo "unknown set $s (train, val, test)" >&2; exit 2 ;;
