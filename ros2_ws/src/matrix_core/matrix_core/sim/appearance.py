@@ -8,10 +8,11 @@ away from the light (a person's lit side is brighter).
 
 import numpy as np
 
-SHADED, LIT = 0.55, 1.0  # brightness of the side away from / facing the light (times the colour)
+SHADED, LIT = 0.7, 1.05  # brightness of the side away from / facing the light (times the colour)
 
-_SUITS = np.array([[22, 22, 24], [35, 35, 38], [50, 50, 52], [62, 60, 58], [80, 80, 82], [48, 38, 30],
-                   [70, 45, 30], [30, 40, 55], [42, 48, 60], [60, 55, 50]], dtype=float)  # BGR, dark
+_SUITS = np.array([[28, 28, 30], [45, 45, 48], [62, 62, 64], [75, 73, 70], [95, 95, 98], [58, 48, 40],
+                   [80, 55, 38], [40, 50, 65], [52, 58, 70], [72, 66, 60], [105, 102, 100]],
+                  dtype=float)  # BGR: black, greys, charcoal, dark blue, brown
 _LIGHT_SHIRTS = np.array([[170, 170, 172], [200, 200, 205], [150, 160, 170], [120, 130, 150],
                           [110, 110, 112], [140, 120, 100]], dtype=float)
 _DRESSES = np.array([[30, 30, 35], [40, 30, 80], [70, 40, 40], [90, 90, 95], [50, 60, 110],

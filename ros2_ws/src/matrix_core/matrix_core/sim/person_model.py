@@ -16,7 +16,7 @@ import numpy as np
 
 RING_ANGLES = np.linspace(0.0, 2 * np.pi, 10, endpoint=False)
 STRIDE = 0.7  # metres walked per gait cycle, x body height
-SWING_DEG = 28.0  # leg swing amplitude at walking speed; arms swing 0.7 of it
+SWING_DEG = 25.0  # leg swing amplitude at walking speed; arms swing 0.7 of it
 FULL_SWING_SPEED = 0.8  # m/s: slower people swing less, standing people (speed ~0) not at all
 REF_HEIGHT = 1.75
 
@@ -28,7 +28,7 @@ LEG_R_TOP, LEG_R_FOOT = 0.075, 0.055
 ARM_HALF, ARM_LEN, ARM_R_TOP, ARM_R_HAND = 0.19, 0.36, 0.045, 0.04  # ARM_LEN x height
 TORSO_RINGS = ((HIP_Z, 0.095, 0.15), (CHEST_Z, 0.12, 0.19), (SHOULDER_Z, 0.10, 0.17))  # (z, depth, width)
 NECK_R = 0.05
-DRESS_TOP, DRESS_HEM_Z, DRESS_HEM_R = (WAIST_Z, 0.10, 0.155), 0.30, 0.25
+DRESS_TOP, DRESS_HEM_Z, DRESS_HEM_R = (WAIST_Z, 0.10, 0.15), 0.34, 0.21
 
 # Ring layout per person: index ranges of each part (legs and arms: left then right).
 PARTS = {'leg_l': (0, 2), 'leg_r': (2, 4), 'arm_l': (4, 6), 'arm_r': (6, 8), 'torso': (8, 11),
