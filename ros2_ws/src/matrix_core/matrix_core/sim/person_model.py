@@ -34,6 +34,7 @@ DRESS_TOP, DRESS_HEM_Z, DRESS_HEM_R = (WAIST_Z, 0.10, 0.15), 0.34, 0.21
 PARTS = {'leg_l': (0, 2), 'leg_r': (2, 4), 'arm_l': (4, 6), 'arm_r': (6, 8), 'torso': (8, 11),
          'neck': (11, 13), 'dress': (13, 15)}
 N_RINGS = 15
+LIT_PARTS = ('leg_l', 'leg_r', 'torso', 'dress')  # drawn with a lit side (arms, neck: too thin to show)
 
 
 def gait_phase(walked, heights, ids) -> np.ndarray:

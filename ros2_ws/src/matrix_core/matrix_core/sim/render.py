@@ -22,7 +22,7 @@ import cv2
 import numpy as np
 
 from matrix_core.sim.appearance import LIT, SHADED
-from matrix_core.sim.person_model import PARTS, RING_ANGLES, body_rings, head_centers
+from matrix_core.sim.person_model import LIT_PARTS, PARTS, RING_ANGLES, body_rings, head_centers
 from matrix_core.sim.raster import (SHIFT, clip_half_plane_2d, clip_near, fixed, project_camera_points,
                                     to_camera)
 from matrix_core.sim.scene import box_faces
@@ -295,29 +295,31 @@ class Renderer:
         hi = np.maximum(np.nanmax(big, axis=1), head_uv[:, 0] + head_r[:, None])
         ok &= (hi[:, 0] >= 0) & (hi[:, 1] >= 0) & (lo[:, 0] <= camera.width) & (lo[:, 1] <= camera.height)
         lit_ok = {name: lit[:, a:b].any(axis=2).all(axis=1) & (lit[:, a:b].sum(axis=(1, 2)) >= 3)
-                  for name, (a, b) in PARTS.items()}
+                  for name, (a, b) in PARTS.items() if name in LIT_PARTS}
         depth = np.linalg.norm(camera.center[:2] - people.positions, axis=1)
         colors = people.colors.astype(float)
+        if colors.shape[1] < 4:  # no hair colour given: dark hair
+            colors = np.concatenate([colors, np.full((len(colors), 1, 3), 25.0)], axis=1)
+        shaded, lit_col = (colors * SHADED).tolist(), (colors * LIT).tolist()
+        head_col, hair_col = (colors[:, 2] * (SHADED + LIT) / 2).tolist(), colors[:, 3].tolist()
         out = []
         for k in range(len(people.ids)):
             if not ok[k]:
                 out.append(None)
                 continue
-            shirt, legs, skin = colors[k, 0], colors[k, 1], colors[k, 2]
-            hair = colors[k, 3] if colors.shape[1] > 3 else np.array([25.0, 25.0, 30.0])
             d = part_depth[k]
             far_leg, near_leg = ('leg_l', 'leg_r') if d[1] > d[3] else ('leg_r', 'leg_l')
             far_arm, near_arm = ('arm_l', 'arm_r') if d[5] > d[7] else ('arm_r', 'arm_l')
-            order = [(far_leg, legs), (near_leg, legs)] + ([('dress', shirt)] if dress[k] else [])
-            order += [(far_arm, shirt), ('torso', shirt), ('neck', skin), (near_arm, shirt)]
+            order = [(far_leg, 1), (near_leg, 1)] + ([('dress', 0)] if dress[k] else [])
+            order += [(far_arm, 0), ('torso', 0), ('neck', 2), (near_arm, 0)]  # colour index
             parts = []
-            for name, color in order:
+            for name, c in order:
                 a, b = PARTS[name]
-                parts.append(('poly', cv2.convexHull(uv_fixed[k, a:b].reshape(-1, 2)), tuple(color * SHADED)))
-                if lit_ok[name][k]:
-                    parts.append(('lit', cv2.convexHull(uv_fixed[k, a:b][lit[k, a:b]]), tuple(color * LIT)))
-            parts.append(('circle', (head_uv[k, 0], head_r[k]), tuple(skin * (SHADED + LIT) / 2)))
-            parts.append(('circle', (head_uv[k, 1], head_r[k] * 0.8), tuple(hair)))
+                parts.append(('poly', cv2.convexHull(uv_fixed[k, a:b].reshape(-1, 2)), shaded[k][c]))
+                if name in LIT_PARTS and lit_ok[name][k]:
+                    parts.append(('lit', cv2.convexHull(uv_fixed[k, a:b][lit[k, a:b]]), lit_col[k][c]))
+            parts.append(('circle', (head_uv[k, 0], head_r[k]), head_col[k]))
+            parts.append(('circle', (head_uv[k, 1], head_r[k] * 0.8), hair_col[k]))
             out.append((float(depth[k]), (*lo[k], *hi[k]), parts))
         return out
 
