@@ -18,10 +18,10 @@ from matrix_core.sim.visibility import line_of_sight
 PX = 2.0  # rasterisation slack (LINE_8 fills and circles), pixels
 
 
-@pytest.fixture(scope='module')
-def sim():
+@pytest.fixture(scope='module', params=[(640, 360), (1920, 1080)], ids=['640', '1920'])
+def sim(request):
     cv2.setNumThreads(1)
-    s = Simulation(load_scene_config('complex'), seed=11, width=640, height=360)
+    s = Simulation(load_scene_config('complex'), seed=11, width=request.param[0], height=request.param[1])
     s.step(1.0)
     return s
 
@@ -48,7 +48,8 @@ def test_drawn_body_within_bounded_annotation_box_and_foot_at_bottom(sim, walkin
     """For random people and cameras, the drawn body (id buffer) of a lone person:
     - lies inside the projected cylinder of :func:`max_reach` (the documented excess over the 0.16 m x
       1.8 m MATRIX cylinder: swinging feet/hands and shoulders sideways, heads of people taller than 1.8 m);
-    - has most of its pixels inside the MATRIX annotation box (grown by PX);
+    - has most of its pixels inside the MATRIX annotation box (grown by PX): what exceeds it is the
+      swinging feet and hands, the shoulders (0.19 m + the arm, wider than 0.16 m) and heads above 1.8 m;
     - has its bottom at the foot point: no higher than it, and no lower than the farthest foot can reach
       (standing: within the foot's own size)."""
     rng = np.random.default_rng(3 if walking else 4)
@@ -82,7 +83,8 @@ def test_drawn_body_within_bounded_annotation_box_and_foot_at_bottom(sim, walkin
             checked += 1
     assert checked >= 30
     print(f'checked {checked}, inside share median {np.median(inside_share):.3f} min {min(inside_share):.3f}')
-    assert np.median(inside_share) > (0.9 if walking else 0.97) and min(inside_share) > (0.7 if walking else 0.9)
+    assert np.median(inside_share) > (0.9 if walking else 0.97)
+    assert min(inside_share) > (0.7 if walking else 0.85)
 
 
 def test_walking_pose_geometry():
