@@ -189,6 +189,14 @@ def test_simulation_people_are_deterministic():
     assert (renders[0][0] == renders[1][0]).all() and (renders[0][1] == renders[1][1]).all()
 
 
+def test_walking_pose_can_be_switched_off():
+    cfg = load_scene_config('simple')
+    cfg.crowd.walking_pose = False
+    s = Simulation(cfg, seed=0, width=320, height=180)
+    s.step(1.0)
+    assert s.people().swings is None and s.crowd.speeds.max() > 0.5
+
+
 @pytest.mark.parametrize('variant', VARIANTS)
 def test_heights_default_and_variants(variant):
     assert CrowdConfig().height_range == [1.5, 1.95]

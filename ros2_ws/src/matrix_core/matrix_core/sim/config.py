@@ -78,6 +78,7 @@ class CrowdConfig:
     body_radius: float = 0.22  # unused by the articulated body (sim/person_model.py); kept for old files
     leg_radius: float = 0.16  # collision / annotation radius (= the 0.16 m annotation cylinder)
     dress_fraction: float = 0.2  # share of people in a dress (a short cone from the waist)
+    walking_pose: bool = True  # legs and arms swing while walking; false: everybody in the rest pose
     keep_out_margin: float = 0.5  # metres kept free around the block and inside the area border
 
     def __post_init__(self):

@@ -217,7 +217,7 @@ class Renderer:
             hulls.append(np.concatenate([foot, foot + offset * height]))
         if people is not None:
             ring = 0.22 * np.stack([np.cos(RING_ANGLES), np.sin(RING_ANGLES)], axis=1)
-            for xy, h in zip(people.positions, people.heights):  # slim body: feet spread, shoulders narrower
+            for xy, h in zip(people.positions, people.heights):  # a slim body: 0.22 m at the feet, less above
                 hulls.append(np.concatenate([xy + ring, xy + ring * 0.6 + offset * h]))
         polys = []
         for pts in hulls:

@@ -66,8 +66,8 @@ class Simulation:
         c = self.config.crowd
         cr = self.crowd
         return People(cr.ids, cr.positions, cr.heights, self.colors, c.leg_radius, c.body_radius,
-                      cr.headings, gait_phase(cr.walked, cr.heights, cr.ids), swing_amplitude(cr.speeds),
-                      self.dress)
+                      cr.headings, gait_phase(cr.walked, cr.heights, cr.ids),
+                      swing_amplitude(cr.speeds) if c.walking_pose else None, self.dress)
 
     def positions(self) -> dict:
         """person id -> (3,) foot point, metres."""
