@@ -21,7 +21,7 @@ _SKIN = np.array([[140, 170, 215], [120, 150, 200], [95, 120, 165], [70, 90, 125
                   [125, 135, 150], [100, 108, 118]], dtype=float)  # the last two: greyish (dusk)
 _HAIR = np.array([[15, 15, 18], [25, 30, 40], [30, 45, 70], [60, 80, 110], [110, 110, 115]], dtype=float)
 DRESS_FRACTION = 0.2
-LIGHT_SHIRT_FRACTION = 0.25
+LIGHT_SHIRT_FRACTION = 0.15
 
 
 def person_looks(rng: np.random.Generator, n: int, dress_fraction: float = DRESS_FRACTION) -> tuple:
