@@ -74,13 +74,16 @@ class CrowdConfig:
     count: int = 40
     speed: float = 1.2  # preferred walking speed, m/s
     speed_std: float = 0.1
-    height_range: list = field(default_factory=lambda: [1.6, 1.9])  # body height, metres
-    body_radius: float = 0.22  # shoulders
-    leg_radius: float = 0.16  # = the 0.16 m annotation cylinder, so the annotated foot point is on the body
+    height_range: list = field(default_factory=lambda: [1.5, 1.95])  # body height, metres
+    body_radius: float = 0.22  # unused by the articulated body (sim/person_model.py); kept for old files
+    leg_radius: float = 0.16  # collision / annotation radius (= the 0.16 m annotation cylinder)
+    dress_fraction: float = 0.2  # share of people in a dress (a short cone from the waist)
+    walking_pose: bool = True  # legs and arms swing while walking; false: everybody in the rest pose
     keep_out_margin: float = 0.5  # metres kept free around the block and inside the area border
 
     def __post_init__(self):
-        if self.count < 0 or self.speed <= 0 or len(self.height_range) != 2:
+        if (self.count < 0 or self.speed <= 0 or len(self.height_range) != 2
+                or not 0.0 <= self.dress_fraction <= 1.0):
             raise ValueError(f'invalid crowd config {self}')
 
 

@@ -16,6 +16,18 @@ PERSON_A, PERSON_B, PERSON_R = 3.0, 0.25, 0.6  # repulsion strength (m/s^2), ran
 WALL_A, WALL_B = 4.0, 0.25
 
 
+def advance_gait(crowd, old_positions, duration: float) -> None:
+    """Update ``crowd.headings`` (N,) radians, ``crowd.walked`` (N,) metres and ``crowd.speeds`` (N,) m/s
+    from the move ``old_positions`` -> ``crowd.positions`` over ``duration`` seconds (what the walking pose
+    needs); the heading is kept while a person barely moves."""
+    step = crowd.positions - old_positions
+    dist = np.linalg.norm(step, axis=1)
+    moving = dist > 0.02 * duration
+    crowd.headings = np.where(moving, np.arctan2(step[:, 1], step[:, 0]), crowd.headings)
+    crowd.walked = crowd.walked + dist
+    crowd.speeds = dist / max(duration, 1e-9)
+
+
 def _inflated(bounds, margin):
     x0, y0, x1, y1 = bounds
     return (x0 - margin, y0 - margin, x1 + margin, y1 + margin)
@@ -64,6 +76,10 @@ class Crowd:
         self.velocity = np.zeros((n, 2))
         self.via = [None] * n  # current detour corner per person
         self.goals = np.array([self._random_goal(p) for p in self.positions]).reshape(n, 2)
+        to_goal = self.goals - self.positions
+        self.headings = np.arctan2(to_goal[:, 1], to_goal[:, 0])  # walking pose (see advance_gait)
+        self.walked = np.zeros(n)
+        self.speeds = np.zeros(n)
 
     @property
     def ids(self) -> np.ndarray:
@@ -149,6 +165,7 @@ class Crowd:
         vel *= np.minimum(1.0, 1.3 * self.speed[:, None] / np.maximum(v_norm, 1e-9))
         self.positions = self._constrain(pos + vel * dt)
         self.velocity = (self.positions - pos) / dt
+        advance_gait(self, pos, dt)
 
     def _wall_force(self, pos, box) -> np.ndarray:
         """Repulsion from the outside of an obstacle box, or (box None) from the inside of the area border."""
@@ -182,10 +199,12 @@ class ReplayCrowd:
 
     Args:
         dataset: a dataset with ``pedestrian_positions(frame)`` and ``trajectory_frames``.
-        heights: body height per person id (metres); defaults to 1.75 m.
+        height_range: body heights are drawn uniformly in it (metres).
+
+    Heading, distance walked and speed (for the walking pose) come from successive positions.
     """
 
-    def __init__(self, dataset, rng: np.random.Generator, height_range=(1.6, 1.9)):
+    def __init__(self, dataset, rng: np.random.Generator, height_range=(1.5, 1.95)):
         self.dataset = dataset
         self.frames = list(dataset.trajectory_frames)
         if not self.frames:
@@ -195,6 +214,8 @@ class ReplayCrowd:
         self._ids = np.array(sorted(first))
         self.heights = rng.uniform(*height_range, len(self._ids))
         self._load()
+        n = len(self._ids)
+        self.headings, self.walked, self.speeds = np.zeros(n), np.zeros(n), np.zeros(n)
 
     def _load(self):
         pos = self.dataset.pedestrian_positions(self.frames[self.index])
@@ -211,4 +232,6 @@ class ReplayCrowd:
         if self.index + 1 >= len(self.frames):
             raise ValueError(f'the replayed trajectories end after {len(self.frames)} frames')
         self.index += 1
+        old = self.positions
         self._load()
+        advance_gait(self, old, duration)

@@ -7,7 +7,9 @@ OpenCV's corner detector finds the true corners); sun shadows of boxes and peopl
 then occluding boxes and pedestrians in a depth order
 that is exact for vertical bodies against convex boxes (see :func:`_draw_order`).
 
-Pedestrians are a legs cylinder, a torso cylinder (convex hulls of projected circles) and a spherical head.
+Pedestrians are articulated (:mod:`~matrix_core.sim.person_model`): legs, arms, torso, neck and an
+optional dress are convex hulls of projected rings, shaded darker on the side away from the light; the
+head is a disc with hair.
 The id buffer holds ``person_id + 1`` where a person is the front-most surface and 0 elsewhere.
 
 Convention: internal camera model (:class:`~matrix_core.geometry.camera.Camera`, ideal pinhole).
@@ -19,20 +21,24 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from matrix_core.sim.appearance import LIT, SHADED
+from matrix_core.sim.person_model import LIT_PARTS, PARTS, RING_ANGLES, body_rings, head_centers
 from matrix_core.sim.raster import (SHIFT, clip_half_plane_2d, clip_near, fixed, project_camera_points,
                                     to_camera)
 from matrix_core.sim.scene import box_faces
 
 SKY = (235, 206, 175)
 LIGHT = np.array([0.45, 0.3, 0.84]) / np.linalg.norm([0.45, 0.3, 0.84])
-RING_ANGLES = np.linspace(0.0, 2 * np.pi, 10, endpoint=False)
-LEG_TOP, TORSO_BOTTOM, TORSO_TOP, HEAD_CENTER, HEAD_RADIUS = 0.48, 0.44, 0.82, 0.915, 0.075  # x height
 
 
 @dataclass
 class People:
-    """Pedestrians to draw. ids: (N,) int; positions: (N, 2) metres; heights: (N,) metres;
-    colors: (N, 3, 3) uint8 BGR of shirt, trousers and skin; radii: (leg, body) metres."""
+    """Pedestrians to draw. ids: (N,) int; positions: (N, 2) metres (the midpoint between the feet);
+    heights: (N,) metres; colors: (N, 3 or 4, 3) uint8 BGR of shirt (or dress), trousers (or legs), skin
+    and hair (default: dark); leg_radius: the annotation / collision radius (metres, not drawn);
+    body_radius: unused (kept for callers). headings: (N,) walking direction, radians (default +x);
+    phases: (N,) gait phase, radians; swings: (N,) leg swing amplitude, radians (default 0: standing);
+    dress: (N,) bool (a short cone from the waist instead of trousers). See :mod:`person_model`."""
 
     ids: np.ndarray
     positions: np.ndarray
@@ -40,19 +46,19 @@ class People:
     colors: np.ndarray
     leg_radius: float = 0.16
     body_radius: float = 0.22
+    headings: np.ndarray = None
+    phases: np.ndarray = None
+    swings: np.ndarray = None
+    dress: np.ndarray = None
 
-
-def _rings(people: People) -> np.ndarray:
-    """(N, 4, R, 3) world points on the circles bounding legs and torso."""
-    n = len(people.ids)
-    cos, sin = np.cos(RING_ANGLES), np.sin(RING_ANGLES)
-    radii = np.array([people.leg_radius, people.leg_radius, people.body_radius * 0.85, people.body_radius])
-    heights = np.array([0.0, LEG_TOP, TORSO_BOTTOM, TORSO_TOP])[None, :] * people.heights[:, None]
-    pts = np.empty((n, 4, len(RING_ANGLES), 3))
-    pts[..., 0] = people.positions[:, None, None, 0] + radii[None, :, None] * cos
-    pts[..., 1] = people.positions[:, None, None, 1] + radii[None, :, None] * sin
-    pts[..., 2] = heights[..., None]
-    return pts
+    def pose(self) -> tuple:
+        """(headings, phases, swings, dress) with the defaults filled in, each (N,)."""
+        n = len(self.ids)
+        zeros = np.zeros(n)
+        return (zeros if self.headings is None else np.asarray(self.headings, float),
+                zeros if self.phases is None else np.asarray(self.phases, float),
+                zeros if self.swings is None else np.asarray(self.swings, float),
+                np.zeros(n, bool) if self.dress is None else np.asarray(self.dress, bool))
 
 
 def _in_front_of_box(point_xy, bounds, camera_xy) -> bool:
@@ -210,8 +216,8 @@ class Renderer:
             foot = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
             hulls.append(np.concatenate([foot, foot + offset * height]))
         if people is not None:
-            ring = 0.25 * np.stack([np.cos(RING_ANGLES), np.sin(RING_ANGLES)], axis=1)
-            for xy, h in zip(people.positions, people.heights):
+            ring = 0.22 * np.stack([np.cos(RING_ANGLES), np.sin(RING_ANGLES)], axis=1)
+            for xy, h in zip(people.positions, people.heights):  # a slim body: 0.22 m at the feet, less above
                 hulls.append(np.concatenate([xy + ring, xy + ring * 0.6 + offset * h]))
         polys = []
         for pts in hulls:
@@ -257,31 +263,64 @@ class Renderer:
         return out
 
     def _person_polys(self, camera, people: People):
-        """Per person: (depth, rect, [(kind, geometry, BGR)]) or None when behind the camera/outside."""
-        rings = _rings(people)
-        cam = to_camera(camera, rings)
-        head_c = np.concatenate([people.positions, (HEAD_CENTER * people.heights)[:, None]], axis=1)
-        head_cam = to_camera(camera, head_c)
-        H, W = camera.height, camera.width
+        """Per person: (depth, rect, [(kind, geometry, BGR)]) or None when behind the camera/outside;
+        'poly'/'lit' geometry is a fixed-point (:data:`SHIFT`) int32 hull, 'circle' is (centre, radius).
+
+        Parts are drawn far to near within a person (far leg, near leg, dress, far arm, torso, neck, near
+        arm, head, hair); each limb is filled in its shaded colour, then its lit and camera-facing half
+        (the hull of the ring points whose normal faces both the light and the camera) in its lit colour
+        ('lit' parts colour the image only, the id buffer already has the whole limb).
+        """
+        headings, phases, swings, dress = people.pose()
+        rings, centers, normals = body_rings(people.positions, people.heights, headings, phases, swings)
+        cam = to_camera(camera, rings)  # (N, K, R, 3)
+        head_c, head_r_m = head_centers(people.positions, people.heights)
+        hair_c = head_c + np.c_[np.zeros((len(head_c), 2)), 0.2 * head_r_m]
+        head_cam = to_camera(camera, np.stack([head_c, hair_c], axis=1))  # (N, 2, 3)
+        light_xy = LIGHT[:2] / max(float(np.linalg.norm(LIGHT[:2])), 1e-9)
+        facing = np.einsum('nkrd,nkrd->nkr', normals, camera.center[:2] - rings[..., :2]) > 0
+        lit = (normals @ light_xy > 0.0) & facing
+        part_depth = np.linalg.norm(centers - camera.center, axis=2)  # (N, K)
+        n_rings = np.where(dress, PARTS['dress'][1], PARTS['dress'][0])
+        used = np.arange(cam.shape[1])[None, :] < n_rings[:, None]  # (N, K): dress rings only with a dress
+        z_min = np.minimum(np.where(used, cam[..., 2].min(axis=2), np.inf).min(axis=1), head_cam[:, 0, 2])
+        ok = z_min >= 0.3
+        safe = np.where(ok[:, None, None, None], cam, 1.0)
+        uv = project_camera_points(camera.K, safe)  # (N, K, R, 2)
+        uv_fixed = np.round(np.clip(uv, -1e5, 1e5) * (1 << SHIFT)).astype(np.int32)  # for OpenCV (shift)
+        head_uv = project_camera_points(camera.K, np.where(ok[:, None, None], head_cam, 1.0))  # (N, 2, 2)
+        head_r = camera.K[0, 0] * head_r_m / np.where(ok, head_cam[:, 0, 2], 1.0)
+        big = np.where(used[..., None, None], uv, np.nan).reshape(len(uv), -1, 2)
+        lo = np.minimum(np.nanmin(big, axis=1), head_uv[:, 0] - head_r[:, None])
+        hi = np.maximum(np.nanmax(big, axis=1), head_uv[:, 0] + head_r[:, None])
+        ok &= (hi[:, 0] >= 0) & (hi[:, 1] >= 0) & (lo[:, 0] <= camera.width) & (lo[:, 1] <= camera.height)
+        lit_ok = {name: lit[:, a:b].any(axis=2).all(axis=1) & (lit[:, a:b].sum(axis=(1, 2)) >= 3)
+                  for name, (a, b) in PARTS.items() if name in LIT_PARTS}
+        depth = np.linalg.norm(camera.center[:2] - people.positions, axis=1)
+        colors = people.colors.astype(float)
+        if colors.shape[1] < 4:  # no hair colour given: dark hair
+            colors = np.concatenate([colors, np.full((len(colors), 1, 3), 25.0)], axis=1)
+        shaded, lit_col = (colors * SHADED).tolist(), (colors * LIT).tolist()
+        head_col, hair_col = (colors[:, 2] * (SHADED + LIT) / 2).tolist(), colors[:, 3].tolist()
         out = []
         for k in range(len(people.ids)):
-            if cam[k, ..., 2].min() < 0.3 or head_cam[k, 2] < 0.3:
+            if not ok[k]:
                 out.append(None)
                 continue
-            uv = project_camera_points(camera.K, cam[k])  # (4, R, 2)
-            head_uv = project_camera_points(camera.K, head_cam[k])
-            head_r = camera.K[0, 0] * HEAD_RADIUS * people.heights[k] / head_cam[k, 2]
-            lo = np.minimum(uv.reshape(-1, 2).min(axis=0), head_uv - head_r)
-            hi = np.maximum(uv.reshape(-1, 2).max(axis=0), head_uv + head_r)
-            if hi[0] < 0 or hi[1] < 0 or lo[0] > W or lo[1] > H:
-                out.append(None)
-                continue
-            shirt, trousers, skin = (tuple(int(v) for v in c) for c in people.colors[k])
-            legs = cv2.convexHull(np.concatenate([uv[0], uv[1]]).astype(np.float32)).reshape(-1, 2)
-            torso = cv2.convexHull(np.concatenate([uv[2], uv[3]]).astype(np.float32)).reshape(-1, 2)
-            parts = [('poly', legs, trousers), ('poly', torso, shirt), ('circle', (head_uv, head_r), skin)]
-            depth = float(np.linalg.norm(camera.center[:2] - people.positions[k]))
-            out.append((depth, (*lo, *hi), parts))
+            d = part_depth[k]
+            far_leg, near_leg = ('leg_l', 'leg_r') if d[1] > d[3] else ('leg_r', 'leg_l')
+            far_arm, near_arm = ('arm_l', 'arm_r') if d[5] > d[7] else ('arm_r', 'arm_l')
+            order = [(far_leg, 1), (near_leg, 1)] + ([('dress', 0)] if dress[k] else [])
+            order += [(far_arm, 0), ('torso', 0), ('neck', 2), (near_arm, 0)]  # colour index
+            parts = []
+            for name, c in order:
+                a, b = PARTS[name]
+                parts.append(('poly', cv2.convexHull(uv_fixed[k, a:b].reshape(-1, 2)), shaded[k][c]))
+                if name in LIT_PARTS and lit_ok[name][k]:
+                    parts.append(('lit', cv2.convexHull(uv_fixed[k, a:b][lit[k, a:b]]), lit_col[k][c]))
+            parts.append(('circle', (head_uv[k, 0], head_r[k]), head_col[k]))
+            parts.append(('circle', (head_uv[k, 1], head_r[k] * 0.8), hair_col[k]))
+            out.append((float(depth[k]), (*lo[k], *hi[k]), parts))
         return out
 
     def _boxes_and_people(self, camera, img, ids, people):
@@ -312,10 +351,10 @@ class Renderer:
                     cv2.fillConvexPoly(ids, pts, 0, cv2.LINE_8, SHIFT)
                 continue
             for kind, geom, color in it['parts']:
-                if kind == 'poly':
-                    pts = fixed(geom)
-                    cv2.fillConvexPoly(img, pts, color, cv2.LINE_8, SHIFT)
-                    cv2.fillConvexPoly(ids, pts, it['id'], cv2.LINE_8, SHIFT)
+                if kind in ('poly', 'lit'):  # geometry: fixed-point int32 hull
+                    cv2.fillConvexPoly(img, geom, color, cv2.LINE_8, SHIFT)
+                    if kind == 'poly':
+                        cv2.fillConvexPoly(ids, geom, it['id'], cv2.LINE_8, SHIFT)
                 else:
                     (u, v), r = geom
                     center = (int(round(u * (1 << SHIFT))), int(round(v * (1 << SHIFT))))

@@ -20,11 +20,12 @@ import numpy as np
 from matrix_core.datasets import MatrixWriter
 from matrix_core.datasets.matrix_conventions import view_name, world_to_position_id
 from matrix_core.datasets.types import PersonAnnotation
-from matrix_core.sim.appearance import person_colors
+from matrix_core.sim.appearance import person_looks
 from matrix_core.sim.config import load_scene_config, scene_config_to_dict
 from matrix_core.sim.crowd import Crowd, ReplayCrowd
 from matrix_core.sim.drones import DroneFleet
 from matrix_core.sim.ground_truth import annotation_box, view_truth, visible_markers
+from matrix_core.sim.person_model import gait_phase, swing_amplitude
 from matrix_core.sim.render import People, Renderer
 from matrix_core.sim.scene import Scene
 from matrix_core.sim.visibility import line_of_sight, rays_blocked
@@ -54,7 +55,7 @@ class Simulation:
         else:
             self.crowd = Crowd(config, crowd_rng)
         self.fleet = DroneFleet(config.drones, config.center, drone_rng)
-        self.colors = person_colors(look_rng, len(self.crowd.ids))
+        self.colors, self.dress = person_looks(look_rng, len(self.crowd.ids), config.crowd.dress_fraction)
         self.views = [view_name(k + 1) for k in range(config.drones.count)]
 
     def step(self, seconds: float) -> None:
@@ -63,8 +64,10 @@ class Simulation:
 
     def people(self) -> People:
         c = self.config.crowd
-        return People(self.crowd.ids, self.crowd.positions, self.crowd.heights, self.colors,
-                      c.leg_radius, c.body_radius)
+        cr = self.crowd
+        return People(cr.ids, cr.positions, cr.heights, self.colors, c.leg_radius, c.body_radius,
+                      cr.headings, gait_phase(cr.walked, cr.heights, cr.ids),
+                      swing_amplitude(cr.speeds) if c.walking_pose else None, self.dress)
 
     def positions(self) -> dict:
         """person id -> (3,) foot point, metres."""
