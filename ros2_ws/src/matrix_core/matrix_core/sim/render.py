@@ -10,6 +10,9 @@ that is exact for vertical bodies against convex boxes (see :func:`_draw_order`)
 Pedestrians are a legs cylinder, a torso cylinder (convex hulls of projected circles) and a spherical head.
 The id buffer holds ``person_id + 1`` where a person is the front-most surface and 0 elsewhere.
 
+Light, sky colour and shadow darkness come from the renderer's per-sequence
+:class:`~matrix_core.sim.lighting.Lighting` (``Renderer.light``).
+
 Convention: internal camera model (:class:`~matrix_core.geometry.camera.Camera`, ideal pinhole).
 """
 
@@ -19,12 +22,11 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from matrix_core.sim.lighting import DAY, UP
 from matrix_core.sim.raster import (SHIFT, clip_half_plane_2d, clip_near, fixed, project_camera_points,
                                     to_camera)
 from matrix_core.sim.scene import box_faces
 
-SKY = (235, 206, 175)
-LIGHT = np.array([0.45, 0.3, 0.84]) / np.linalg.norm([0.45, 0.3, 0.84])
 RING_ANGLES = np.linspace(0.0, 2 * np.pi, 10, endpoint=False)
 LEG_TOP, TORSO_BOTTOM, TORSO_TOP, HEAD_CENTER, HEAD_RADIUS = 0.48, 0.44, 0.82, 0.915, 0.075  # x height
 
@@ -105,10 +107,12 @@ def _draw_order(items, camera_xy) -> list:
 
 
 class Renderer:
-    """Renders views of a :class:`~matrix_core.sim.scene.Scene`."""
+    """Renders views of a :class:`~matrix_core.sim.scene.Scene` under ``light`` (a
+    :class:`~matrix_core.sim.lighting.Lighting`; shading code reads ``renderer.light``)."""
 
-    def __init__(self, scene):
+    def __init__(self, scene, light=DAY):
         self.scene = scene
+        self.light = light
 
     def render(self, camera, people: People = None) -> tuple:
         """Render one view.
@@ -141,26 +145,30 @@ class Renderer:
         rect = np.array([[-1, -1], [W, -1], [W, H], [-1, H]], dtype=float)
         ground = clip_half_plane_2d(rect, -ray_z - np.array([0.0, 0.0, 0.01]))
         top = H if len(ground) < 3 else int(np.clip(np.floor(ground[:, 1].min()), 0, H))
-        img[:top] = SKY
+        sky_bgr = self.light.sky
+        img[:top] = sky_bgr
         if top >= H:
             return
         tex, t_H_g = self.scene.ground_level_for(camera)
         rows_H_img = np.array([[1.0, 0, 0], [0, 1.0, -top], [0, 0, 1.0]])  # image rows top.. -> 0..
         rows_H_tex = rows_H_img @ camera.img_H_ground(0.0) @ np.linalg.inv(t_H_g)
         cv2.warpPerspective(tex, rows_H_tex, (W, H - top), dst=img[top:], flags=cv2.INTER_LINEAR,
-                            borderMode=cv2.BORDER_CONSTANT, borderValue=SKY)
+                            borderMode=cv2.BORDER_CONSTANT, borderValue=sky_bgr)
+        if not self.light.plain:
+            cv2.multiply(img[top:], tuple(self.light.gain(UP)), dst=img[top:])
         sky = clip_half_plane_2d(rect, ray_z + np.array([0.0, 0.0, 0.01]))
         if len(sky) >= 3:
-            cv2.fillConvexPoly(img, fixed(sky), SKY, cv2.LINE_AA, SHIFT)
+            cv2.fillConvexPoly(img, fixed(sky), sky_bgr, cv2.LINE_AA, SHIFT)
 
     def _facades(self, camera, img):
         H, W = img.shape[:2]
         c = camera.center
-        visible = []
+        visible, normal_out = [], {}
         for f in self.scene.facades:
             normal = np.cross(f.corners[3] - f.corners[0], f.corners[1] - f.corners[0])  # towards the inside
             if normal @ (c - f.corners[0]) <= 0:  # seen from behind
                 continue
+            normal_out[id(f)] = normal / np.linalg.norm(normal)
             poly = clip_near(to_camera(camera, f.corners))
             if len(poly) >= 3:
                 visible.append((-float(np.mean(poly[:, 2])), f, project_camera_points(camera.K, poly)))
@@ -173,12 +181,18 @@ class Renderer:
             shift = np.array([[1.0, 0, -x0], [0, 1.0, -y0], [0, 0, 1.0]])
             patch = cv2.warpPerspective(f.texture, shift @ H_tex, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR,
                                         borderMode=cv2.BORDER_REPLICATE)
+            if not self.light.plain:
+                gain = self.light.gain(normal_out[id(f)]) * self.light.facade_level
+                cv2.multiply(patch, tuple(gain), dst=patch)
             mask = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
             cv2.fillConvexPoly(mask, fixed(uv - [x0, y0]), 255, cv2.LINE_8, SHIFT)
             roi = img[y0:y1, x0:x1]
             np.copyto(roi, patch, where=mask[..., None].astype(bool))
 
     def _boards(self, camera, img):
+        white, black = (235, 235, 235), (25, 25, 25)  # paint on the ground: lit like the ground texture
+        if not self.light.plain:
+            white, black = (tuple(float(v) for v in np.multiply(c, self.light.gain(UP))) for c in (white, black))
         for board in self.scene.boards:
             n, s = board.squares, board.square_m
             g = np.arange(n + 1) * s
@@ -190,20 +204,20 @@ class Renderer:
             outline = clip_near(cam[[0, 0, -1, -1], [0, -1, -1, 0]])
             if len(outline) < 3:
                 continue
-            cv2.fillConvexPoly(img, fixed(project_camera_points(camera.K, outline)), (235, 235, 235),
-                               cv2.LINE_AA, SHIFT)
+            cv2.fillConvexPoly(img, fixed(project_camera_points(camera.K, outline)), white, cv2.LINE_AA, SHIFT)
             ok = cam[..., 2] > 0.3
             uv = project_camera_points(camera.K, np.where(ok[..., None], cam, 1.0))
             for j in range(n):
                 for i in range(j % 2, n, 2):  # square (i, j) black when i + j is even
                     if ok[j, i] and ok[j, i + 1] and ok[j + 1, i + 1] and ok[j + 1, i]:
                         quad = uv[[j, j, j + 1, j + 1], [i, i + 1, i + 1, i]]
-                        cv2.fillConvexPoly(img, fixed(quad), (25, 25, 25), cv2.LINE_AA, SHIFT)
+                        cv2.fillConvexPoly(img, fixed(quad), black, cv2.LINE_AA, SHIFT)
 
     def _shadows(self, camera, img, people):
         """Darken the ground under the sun's shadows of boxes and people (hulls of their footprint and
-        their top outline projected along :data:`LIGHT` onto z = 0); only in the shadows' bounding box."""
-        offset = -LIGHT[:2] / LIGHT[2]  # ground displacement per metre of height
+        their top outline projected along the sun direction onto z = 0); only in the shadows' bounding box."""
+        sun = self.light.direction
+        offset = -sun[:2] / sun[2]  # ground displacement per metre of height
         hulls = []
         for bounds, height, _ in self.scene.boxes:
             x0, y0, x1, y1 = bounds
@@ -232,7 +246,7 @@ class Renderer:
             cv2.fillConvexPoly(mask, fixed(uv - [x0, y0]), 1, cv2.LINE_8, SHIFT)
         roi = img[y0:y1, x0:x1]
         sel = mask.view(bool)
-        roi[sel] = (roi[sel].astype(np.uint16) * 160 >> 8).astype(np.uint8)  # 62 % brightness
+        roi[sel] = (roi[sel].astype(np.uint16) * self.light.shadow_mult_256 >> 8).astype(np.uint8)
 
     # ----- occluders and people ----------------------------------------------------------------------
     def _box_polys(self, camera, bounds, height, cfg):
@@ -243,7 +257,7 @@ class Renderer:
         for corners, normal in box_faces(bounds, height):
             if normal @ (c - corners[0]) <= 0:
                 continue
-            shade = base * (0.55 + 0.45 * max(0.0, float(normal @ LIGHT)))
+            shade = self.light.color(base, normal)
             faces = [(corners, shade)]
             if cfg.stripes and normal[2] == 0:
                 for z0 in np.arange(0.5, height, 1.0):

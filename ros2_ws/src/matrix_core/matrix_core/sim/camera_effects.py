@@ -1,0 +1,139 @@
+"""Per-drone camera effects of the simulator: the render looks like a real camera's image, not a clean pinhole.
+
+A view is rendered at ``supersample`` times the output size through the same camera (intrinsics scaled about
+the pixel-centre convention) and averaged down with INTER_AREA, like a sensor integrating over its pixels; then
+optical blur, vignetting, exposure and white balance, sensor noise (Gaussian read noise plus shot noise),
+gamma/contrast and a JPEG encode/decode round trip (so the frame carries JPEG artefacts even when saved as PNG).
+
+Each drone draws its parameters once per sequence (:class:`DroneEffects`); exposure and white balance jitter a
+little per frame. Effects act on pixels only: the camera model, the id buffer and the annotations are those of
+the plain render (the id buffer is sampled at the output pixel centres).
+"""
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from matrix_core.geometry.camera import Camera
+
+
+@dataclass(frozen=True)
+class DroneEffects:
+    """One drone's camera for a sequence. Gains are BGR; ``blur_sigma`` is in pixels of a 640-px-wide image."""
+
+    exposure: float
+    white_balance: np.ndarray  # (3,)
+    gamma: float
+    contrast: float
+    blur_sigma: float
+    noise_sigma: float
+    shot_noise: float
+    vignetting: float
+    jpeg_quality: int
+
+
+def sample_drone_effects(cfg, rng) -> DroneEffects:
+    """Draw one drone's :class:`DroneEffects` uniformly from the ranges of a ``CameraEffectsConfig``."""
+    u = lambda lo_hi: float(rng.uniform(*lo_hi))  # noqa: E731
+    return DroneEffects(exposure=u(cfg.exposure), white_balance=rng.uniform(*cfg.white_balance, 3),
+                        gamma=u(cfg.gamma), contrast=u(cfg.contrast), blur_sigma=u(cfg.blur_sigma),
+                        noise_sigma=u(cfg.noise_sigma), shot_noise=u(cfg.shot_noise),
+                        vignetting=u(cfg.vignetting),
+                        jpeg_quality=int(rng.integers(cfg.jpeg_quality[0], cfg.jpeg_quality[1] + 1)))
+
+
+def supersampled_camera(camera, factor: float) -> Camera:
+    """The same camera at ``factor`` times the image size (rounded): pixel centres map as
+    ``u_big = s (u + 0.5) - 0.5`` per axis, the map INTER_AREA down-sampling inverts exactly."""
+    W, H = round(camera.width * factor), round(camera.height * factor)
+    sx, sy = W / camera.width, H / camera.height
+    big_H_img = np.array([[sx, 0.0, (sx - 1) / 2], [0.0, sy, (sy - 1) / 2], [0.0, 0.0, 1.0]])
+    return Camera(big_H_img @ camera.K, camera.cam_T_world, W, H, camera.dist)
+
+
+def downsample(img, ids, width: int, height: int) -> tuple:
+    """(image INTER_AREA-averaged to width x height, id buffer sampled at the output pixel centres)."""
+    Hb, Wb = ids.shape
+    cols = np.clip(np.round((np.arange(width) + 0.5) * Wb / width - 0.5).astype(int), 0, Wb - 1)
+    rows = np.clip(np.round((np.arange(height) + 0.5) * Hb / height - 0.5).astype(int), 0, Hb - 1)
+    return (cv2.resize(img, (width, height), interpolation=cv2.INTER_AREA), ids[rows[:, None], cols[None, :]])
+
+
+def jpeg_round_trip(img, quality: int) -> np.ndarray:
+    """(H, W, 3) uint8 BGR -> the same image after JPEG encoding at ``quality`` and decoding."""
+    ok, buf = cv2.imencode('.jpg', img, [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
+    if not ok:
+        raise RuntimeError('JPEG encoding failed')
+    return cv2.imdecode(buf, cv2.IMREAD_COLOR)
+
+
+class CameraEffects:
+    """The camera effects of every drone of one sequence.
+
+    Args:
+        cfg: ``CameraEffectsConfig`` (None or ``enabled: false``: plain renders, no supersampling).
+        n_drones: number of views.
+        seed_seq: ``np.random.SeedSequence``; its first child draws the parameters, the next ones each
+            drone's per-frame jitter and noise.
+    """
+
+    def __init__(self, cfg, n_drones: int, seed_seq):
+        params_seq, *noise_seqs = seed_seq.spawn(1 + n_drones)
+        rng = np.random.default_rng(params_seq)
+        self.enabled = cfg is not None and cfg.enabled
+        self.supersample = cfg.supersample if self.enabled else 1.0
+        self.jitter = cfg.jitter if self.enabled else 0.0
+        self.drones = [sample_drone_effects(cfg, rng) for _ in range(n_drones)] if self.enabled else []
+        self._noise_rngs = [np.random.default_rng(s) for s in noise_seqs]
+        self._vignette = {}
+
+    def render(self, renderer, camera, people, k: int) -> tuple:
+        """Render view ``k`` through drone ``k``'s camera: (image (H, W, 3) uint8, ids (H, W) uint16) at
+        ``camera``'s size; the plain ``renderer.render`` when disabled."""
+        if not self.enabled:
+            return renderer.render(camera, people)
+        if self.supersample > 1.0:
+            img, ids = renderer.render(supersampled_camera(camera, self.supersample), people)
+            img, ids = downsample(img, ids, camera.width, camera.height)
+        else:
+            img, ids = renderer.render(camera, people)
+        return self.apply(img, k), ids
+
+    def apply(self, img, k: int) -> np.ndarray:
+        """Drone ``k``'s optics, sensor and encoder on a rendered (H, W, 3) uint8 BGR image (one frame: draws
+        its jitter and noise from the drone's generator)."""
+        if not self.enabled:
+            return img
+        e, rng = self.drones[k], self._noise_rngs[k]
+        H, W = img.shape[:2]
+        sigma = e.blur_sigma * W / 640.0
+        if sigma > 0.05:
+            img = cv2.GaussianBlur(img, (0, 0), sigma)
+        gains = (e.exposure * (1.0 + self.jitter * rng.standard_normal())
+                 * e.white_balance * (1.0 + self.jitter * rng.standard_normal(3))).astype(np.float32)
+        f = img.astype(np.float32)
+        f *= self._vignette_map(e.vignetting, W, H) * gains if e.vignetting > 0 else gains
+        # read noise + shot noise (variance grows with the signal), in grey levels
+        std = np.sqrt(np.float32(e.noise_sigma ** 2) + np.float32(e.shot_noise) * np.maximum(f, 0.0))
+        f += std * rng.standard_normal(f.shape, dtype=np.float32)
+        img = np.clip(f, 0, 255).astype(np.uint8)
+        img = cv2.LUT(img, self._tone_lut(e))
+        return jpeg_round_trip(img, e.jpeg_quality)
+
+    def _vignette_map(self, strength: float, width: int, height: int) -> np.ndarray:
+        """(H, W, 1) float32 brightness: 1 at the centre, ``1 - strength`` in the corners (cos^4-like)."""
+        key = (strength, width, height)
+        if key not in self._vignette:
+            x = (np.arange(width, dtype=np.float32) - (width - 1) / 2) / (width / 2)
+            y = (np.arange(height, dtype=np.float32) - (height - 1) / 2) / (width / 2)
+            r2 = (x[None, :] ** 2 + y[:, None] ** 2) / (1.0 + (height / width) ** 2)
+            self._vignette[key] = (1.0 - strength * r2)[..., None].astype(np.float32)
+        return self._vignette[key]
+
+    @staticmethod
+    def _tone_lut(e: DroneEffects) -> np.ndarray:
+        """(256,) uint8 tone curve: gamma, then contrast about mid-grey."""
+        x = np.arange(256) / 255.0
+        y = 0.5 + (x ** e.gamma - 0.5) * e.contrast
+        return np.clip(np.round(y * 255.0), 0, 255).astype(np.uint8)
