@@ -79,14 +79,17 @@ class CameraEffects:
     """
 
     def __init__(self, cfg, n_drones: int, seed_seq):
-        params_seq, *noise_seqs = seed_seq.spawn(1 + n_drones)
+        params_seq, bank_seq, *noise_seqs = seed_seq.spawn(2 + n_drones)
         rng = np.random.default_rng(params_seq)
         self.enabled = cfg is not None and cfg.enabled
         self.supersample = cfg.supersample if self.enabled else 1.0
         self.jitter = cfg.jitter if self.enabled else 0.0
         self.drones = [sample_drone_effects(cfg, rng) for _ in range(n_drones)] if self.enabled else []
         self._noise_rngs = [np.random.default_rng(s) for s in noise_seqs]
-        self._vignette = {}
+        self._noise_std = [np.sqrt(e.noise_sigma ** 2 + e.shot_noise * np.arange(256)).astype(np.float32)
+                           for e in self.drones]  # grey level -> noise standard deviation
+        self._bank_rng = np.random.default_rng(bank_seq)
+        self._banks, self._vignette = {}, {}
 
     def render(self, renderer, camera, people, k: int) -> tuple:
         """Render view ``k`` through drone ``k``'s camera: (image (H, W, 3) uint8, ids (H, W) uint16) at
@@ -102,7 +105,8 @@ class CameraEffects:
 
     def apply(self, img, k: int) -> np.ndarray:
         """Drone ``k``'s optics, sensor and encoder on a rendered (H, W, 3) uint8 BGR image (one frame: draws
-        its jitter and noise from the drone's generator)."""
+        its jitter and noise offset from the drone's generator). Order: blur, vignetting, exposure and white
+        balance with the tone curve (one per-channel look-up table), noise, JPEG."""
         if not self.enabled:
             return img
         e, rng = self.drones[k], self._noise_rngs[k]
@@ -110,30 +114,41 @@ class CameraEffects:
         sigma = e.blur_sigma * W / 640.0
         if sigma > 0.05:
             img = cv2.GaussianBlur(img, (0, 0), sigma)
+        if e.vignetting > 0:
+            img = cv2.multiply(img, self._vignette_map(e.vignetting, W, H), scale=1.0 / 255.0)
         gains = (e.exposure * (1.0 + self.jitter * rng.standard_normal())
-                 * e.white_balance * (1.0 + self.jitter * rng.standard_normal(3))).astype(np.float32)
-        f = img.astype(np.float32)
-        f *= self._vignette_map(e.vignetting, W, H) * gains if e.vignetting > 0 else gains
-        # read noise + shot noise (variance grows with the signal), in grey levels
-        std = np.sqrt(np.float32(e.noise_sigma ** 2) + np.float32(e.shot_noise) * np.maximum(f, 0.0))
-        f += std * rng.standard_normal(f.shape, dtype=np.float32)
-        img = np.clip(f, 0, 255).astype(np.uint8)
-        img = cv2.LUT(img, self._tone_lut(e))
+                 * e.white_balance * (1.0 + self.jitter * rng.standard_normal(3)))
+        img = cv2.LUT(img, tone_lut(gains, e.gamma, e.contrast))
+        # read + shot noise (standard deviation from the signal); unit normals from a per-size bank at a
+        # random offset: drawing H*W*3 fresh normals per view would cost as much as rendering it
+        bank = self._normal_bank(img.size)
+        start = int(rng.integers(0, bank.size - img.size + 1))
+        std = cv2.LUT(img, self._noise_std[k])
+        noise = cv2.multiply(std, bank[start:start + img.size].reshape(img.shape))
+        img = cv2.add(img, noise, dtype=cv2.CV_8U)
         return jpeg_round_trip(img, e.jpeg_quality)
 
+    def _normal_bank(self, size: int) -> np.ndarray:
+        """(2 size,) float32 standard normals, drawn once per image size."""
+        if size not in self._banks:
+            self._banks[size] = self._bank_rng.standard_normal(2 * size, dtype=np.float32)
+        return self._banks[size]
+
     def _vignette_map(self, strength: float, width: int, height: int) -> np.ndarray:
-        """(H, W, 1) float32 brightness: 1 at the centre, ``1 - strength`` in the corners (cos^4-like)."""
+        """(H, W, 3) uint8 brightness x 255: 255 at the centre, ``255 (1 - strength)`` in the corners."""
         key = (strength, width, height)
         if key not in self._vignette:
-            x = (np.arange(width, dtype=np.float32) - (width - 1) / 2) / (width / 2)
-            y = (np.arange(height, dtype=np.float32) - (height - 1) / 2) / (width / 2)
-            r2 = (x[None, :] ** 2 + y[:, None] ** 2) / (1.0 + (height / width) ** 2)
-            self._vignette[key] = (1.0 - strength * r2)[..., None].astype(np.float32)
+            x = (np.arange(width) - (width - 1) / 2) / (width / 2)
+            y = (np.arange(height) - (height - 1) / 2) / (width / 2)
+            r2 = (x[None, :] ** 2 + y[:, None] ** 2) / (1.0 + (height / width) ** 2)  # 1 in the corners
+            v = np.round(255.0 * (1.0 - strength * r2)).astype(np.uint8)
+            self._vignette[key] = np.repeat(v[..., None], 3, axis=2)
         return self._vignette[key]
 
-    @staticmethod
-    def _tone_lut(e: DroneEffects) -> np.ndarray:
-        """(256,) uint8 tone curve: gamma, then contrast about mid-grey."""
-        x = np.arange(256) / 255.0
-        y = 0.5 + (x ** e.gamma - 0.5) * e.contrast
-        return np.clip(np.round(y * 255.0), 0, 255).astype(np.uint8)
+
+def tone_lut(gains, gamma: float, contrast: float) -> np.ndarray:
+    """(256, 1, 3) uint8 per-channel look-up table: BGR ``gains`` (exposure x white balance), then gamma,
+    then contrast about mid-grey."""
+    x = np.clip(np.arange(256)[:, None] / 255.0 * np.asarray(gains)[None, :], 0.0, 1.0)
+    y = 0.5 + (x ** gamma - 0.5) * contrast
+    return np.clip(np.round(y * 255.0), 0, 255).astype(np.uint8).reshape(256, 1, 3)

@@ -245,8 +245,8 @@ class Renderer:
         for uv in polys:
             cv2.fillConvexPoly(mask, fixed(uv - [x0, y0]), 1, cv2.LINE_8, SHIFT)
         roi = img[y0:y1, x0:x1]
-        sel = mask.view(bool)
-        roi[sel] = (roi[sel].astype(np.uint16) * self.light.shadow_mult_256 >> 8).astype(np.uint8)
+        dark = cv2.LUT(roi, (np.arange(256) * self.light.shadow_mult_256 >> 8).astype(np.uint8))
+        cv2.copyTo(dark, mask, roi)  # in place: roi is a view of img
 
     # ----- occluders and people ----------------------------------------------------------------------
     def _box_polys(self, camera, bounds, height, cfg):
