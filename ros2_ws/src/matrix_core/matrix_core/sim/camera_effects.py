@@ -23,7 +23,7 @@ class DroneEffects:
     """One drone's camera for a sequence. Gains are BGR; ``blur_sigma`` is in pixels of a 640-px-wide image."""
 
     exposure: float
-    white_balance: np.ndarray  # (3,)
+    white_balance: np.ndarray  # (3,) BGR gains, green = 1 like a camera's white balance
     gamma: float
     contrast: float
     blur_sigma: float
@@ -36,7 +36,7 @@ class DroneEffects:
 def sample_drone_effects(cfg, rng) -> DroneEffects:
     """Draw one drone's :class:`DroneEffects` uniformly from the ranges of a ``CameraEffectsConfig``."""
     u = lambda lo_hi: float(rng.uniform(*lo_hi))  # noqa: E731
-    return DroneEffects(exposure=u(cfg.exposure), white_balance=rng.uniform(*cfg.white_balance, 3),
+    return DroneEffects(exposure=u(cfg.exposure), white_balance=np.array([u(cfg.white_balance), 1.0, u(cfg.white_balance)]),
                         gamma=u(cfg.gamma), contrast=u(cfg.contrast), blur_sigma=u(cfg.blur_sigma),
                         noise_sigma=u(cfg.noise_sigma), shot_noise=u(cfg.shot_noise),
                         vignetting=u(cfg.vignetting),

@@ -127,7 +127,7 @@ class LightingConfig:
     dusk: list = field(default_factory=lambda: [0.0, 1.0])
     dusk_facade_dimming: float = 0.55  # facades are this much darker at full dusk
     level: list = field(default_factory=lambda: [0.85, 1.08])  # overall light level
-    tint_std: float = 0.04  # per-channel light colour spread
+    tint_std: float = 0.025  # per-channel light colour spread
 
     def __post_init__(self):
         for name in ('azimuth_deg', 'elevation_deg', 'sun_intensity', 'ambient', 'shadow_factor', 'dusk',
@@ -148,7 +148,7 @@ class CameraEffectsConfig:
     enabled: bool = True  # false: the plain pinhole render
     supersample: float = 1.5  # render at this factor of the output size and downsample (INTER_AREA)
     exposure: list = field(default_factory=lambda: [0.85, 1.15])  # gain
-    white_balance: list = field(default_factory=lambda: [0.93, 1.07])  # per-channel gain
+    white_balance: list = field(default_factory=lambda: [0.94, 1.06])  # blue and red gains (green 1)
     gamma: list = field(default_factory=lambda: [0.85, 1.15])
     contrast: list = field(default_factory=lambda: [0.9, 1.1])
     blur_sigma: list = field(default_factory=lambda: [0.0, 1.2])
