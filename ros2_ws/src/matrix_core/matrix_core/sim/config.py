@@ -151,7 +151,7 @@ class CameraEffectsConfig:
     white_balance: list = field(default_factory=lambda: [0.94, 1.06])  # blue and red gains (green 1)
     gamma: list = field(default_factory=lambda: [0.85, 1.15])
     contrast: list = field(default_factory=lambda: [0.9, 1.1])
-    blur_sigma: list = field(default_factory=lambda: [0.0, 1.2])
+    blur_sigma: list = field(default_factory=lambda: [0.0, 0.6])
     noise_sigma: list = field(default_factory=lambda: [1.0, 4.0])  # Gaussian read noise, grey levels
     shot_noise: list = field(default_factory=lambda: [0.0, 0.03])  # variance per grey level
     vignetting: list = field(default_factory=lambda: [0.0, 0.25])  # brightness loss in the corners
