@@ -36,8 +36,9 @@ class DroneEffects:
 def sample_drone_effects(cfg, rng) -> DroneEffects:
     """Draw one drone's :class:`DroneEffects` uniformly from the ranges of a ``CameraEffectsConfig``."""
     u = lambda lo_hi: float(rng.uniform(*lo_hi))  # noqa: E731
+    exposure = u(cfg.exposure)
     white_balance = np.array([u(cfg.white_balance), 1.0, u(cfg.white_balance)])
-    return DroneEffects(exposure=u(cfg.exposure), white_balance=white_balance,
+    return DroneEffects(exposure=exposure, white_balance=white_balance,
                         gamma=u(cfg.gamma), contrast=u(cfg.contrast), blur_sigma=u(cfg.blur_sigma),
                         noise_sigma=u(cfg.noise_sigma), shot_noise=u(cfg.shot_noise),
                         vignetting=u(cfg.vignetting),
