@@ -113,6 +113,16 @@ class Renderer:
     def __init__(self, scene, light=DAY):
         self.scene = scene
         self.light = light
+        self._lit = {}  # id(texture) -> the texture under self.light (built once per sequence)
+
+    def _lit_texture(self, texture, gain) -> np.ndarray:
+        """``texture`` (H, W, 3) uint8 times the BGR ``gain`` (3,), cached: the light is fixed per sequence."""
+        if self.light.plain:
+            return texture
+        key = id(texture)
+        if key not in self._lit:
+            self._lit[key] = (texture, cv2.multiply(texture, tuple(float(g) for g in gain)))
+        return self._lit[key][1]  # the entry keeps the texture alive, so its id stays unique
 
     def render(self, camera, people: People = None) -> tuple:
         """Render one view.
@@ -150,12 +160,11 @@ class Renderer:
         if top >= H:
             return
         tex, t_H_g = self.scene.ground_level_for(camera)
+        tex = self._lit_texture(tex, self.light.gain(UP))
         rows_H_img = np.array([[1.0, 0, 0], [0, 1.0, -top], [0, 0, 1.0]])  # image rows top.. -> 0..
         rows_H_tex = rows_H_img @ camera.img_H_ground(0.0) @ np.linalg.inv(t_H_g)
         cv2.warpPerspective(tex, rows_H_tex, (W, H - top), dst=img[top:], flags=cv2.INTER_LINEAR,
                             borderMode=cv2.BORDER_CONSTANT, borderValue=sky_bgr)
-        if not self.light.plain:
-            cv2.multiply(img[top:], tuple(self.light.gain(UP)), dst=img[top:])
         sky = clip_half_plane_2d(rect, ray_z + np.array([0.0, 0.0, 0.01]))
         if len(sky) >= 3:
             cv2.fillConvexPoly(img, fixed(sky), sky_bgr, cv2.LINE_AA, SHIFT)
@@ -179,11 +188,9 @@ class Renderer:
                 continue
             H_tex = camera.P @ f.world_from_tex()
             shift = np.array([[1.0, 0, -x0], [0, 1.0, -y0], [0, 0, 1.0]])
-            patch = cv2.warpPerspective(f.texture, shift @ H_tex, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR,
+            texture = self._lit_texture(f.texture, self.light.gain(normal_out[id(f)]) * self.light.facade_level)
+            patch = cv2.warpPerspective(texture, shift @ H_tex, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR,
                                         borderMode=cv2.BORDER_REPLICATE)
-            if not self.light.plain:
-                gain = self.light.gain(normal_out[id(f)]) * self.light.facade_level
-                cv2.multiply(patch, tuple(gain), dst=patch)
             mask = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
             cv2.fillConvexPoly(mask, fixed(uv - [x0, y0]), 255, cv2.LINE_8, SHIFT)
             roi = img[y0:y1, x0:x1]
