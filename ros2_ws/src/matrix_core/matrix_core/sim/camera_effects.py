@@ -23,7 +23,7 @@ class DroneEffects:
     """One drone's camera for a sequence. Gains are BGR; ``blur_sigma`` is in pixels of a 640-px-wide image."""
 
     exposure: float
-    white_balance: np.ndarray  # (3,) BGR gains, green = 1 like a camera's white balance
+    white_balance: np.ndarray  # (3,) BGR gains (b, 1, 2 - b)
     gamma: float
     contrast: float
     blur_sigma: float
@@ -37,7 +37,8 @@ def sample_drone_effects(cfg, rng) -> DroneEffects:
     """Draw one drone's :class:`DroneEffects` uniformly from the ranges of a ``CameraEffectsConfig``."""
     u = lambda lo_hi: float(rng.uniform(*lo_hi))  # noqa: E731
     exposure = u(cfg.exposure)
-    white_balance = np.array([u(cfg.white_balance), 1.0, u(cfg.white_balance)])
+    blue = u(cfg.white_balance)  # white-balance errors run along the blue-amber axis (no green casts)
+    white_balance = np.array([blue, 1.0, 2.0 - blue])
     return DroneEffects(exposure=exposure, white_balance=white_balance,
                         gamma=u(cfg.gamma), contrast=u(cfg.contrast), blur_sigma=u(cfg.blur_sigma),
                         noise_sigma=u(cfg.noise_sigma), shot_noise=u(cfg.shot_noise),

@@ -148,7 +148,7 @@ class CameraEffectsConfig:
     enabled: bool = True  # false: the plain pinhole render
     supersample: float = 1.5  # render at this factor of the output size and downsample (INTER_AREA)
     exposure: list = field(default_factory=lambda: [0.85, 1.15])  # gain
-    white_balance: list = field(default_factory=lambda: [0.94, 1.06])  # blue and red gains (green 1)
+    white_balance: list = field(default_factory=lambda: [0.94, 1.06])  # blue gain; red 2 - blue, green 1
     gamma: list = field(default_factory=lambda: [0.85, 1.15])
     contrast: list = field(default_factory=lambda: [0.9, 1.1])
     blur_sigma: list = field(default_factory=lambda: [0.0, 0.6])

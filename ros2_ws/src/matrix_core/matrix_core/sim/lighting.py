@@ -85,7 +85,8 @@ def sample_lighting(cfg, rng) -> Lighting:
     lo, hi = cfg.shadow_factor
     shadow = float(np.clip(u(cfg.shadow_factor) + dusk * 0.5 * (hi - lo), lo, hi))  # dusk: soft shadows
     sky = np.asarray(DAY_SKY_BGR, dtype=float) * (1.0 - dusk) + DUSK_SKY_BGR * dusk
-    tint = (1.0 + rng.normal(0.0, cfg.tint_std, 3)) * (1.0 + (DUSK_TINT_BGR - 1.0) * dusk)
+    warm = rng.normal(0.0, cfg.tint_std)  # light colour varies along the blue-amber axis
+    tint = np.array([1.0 - warm, 1.0, 1.0 + warm]) * (1.0 + (DUSK_TINT_BGR - 1.0) * dusk)
     tint *= u(cfg.level) * (1.0 - 0.15 * dusk)
     return Lighting(direction=direction, sun=sun, ambient=ambient, shadow_factor=shadow,
                     sky=tuple(float(v) for v in np.clip(sky, 0, 255)), tint=tint,
