@@ -27,6 +27,7 @@ from matrix_core.sim.raster import (SHIFT, clip_half_plane_2d, clip_near, fixed,
                                     to_camera)
 from matrix_core.sim.scene import box_faces
 
+LIT_WINDOW_RED = 200  # facade texels this red are lit windows (textures.facade_texture): they glow at dusk
 RING_ANGLES = np.linspace(0.0, 2 * np.pi, 10, endpoint=False)
 LEG_TOP, TORSO_BOTTOM, TORSO_TOP, HEAD_CENTER, HEAD_RADIUS = 0.48, 0.44, 0.82, 0.915, 0.075  # x height
 
@@ -115,13 +116,17 @@ class Renderer:
         self.light = light
         self._lit = {}  # id(texture) -> the texture under self.light (built once per sequence)
 
-    def _lit_texture(self, texture, gain) -> np.ndarray:
-        """``texture`` (H, W, 3) uint8 times the BGR ``gain`` (3,), cached: the light is fixed per sequence."""
+    def _lit_texture(self, texture, gain, emissive_red: int = 256) -> np.ndarray:
+        """``texture`` (H, W, 3) uint8 times the BGR ``gain`` (3,), cached: the light is fixed per sequence.
+        Texels with red >= ``emissive_red`` emit light (lit windows) and keep their colour."""
         if self.light.plain:
             return texture
         key = id(texture)
         if key not in self._lit:
-            self._lit[key] = (texture, cv2.multiply(texture, tuple(float(g) for g in gain)))
+            lit = cv2.multiply(texture, tuple(float(g) for g in gain))
+            glow = texture[..., 2] >= emissive_red
+            lit[glow] = texture[glow]
+            self._lit[key] = (texture, lit)
         return self._lit[key][1]  # the entry keeps the texture alive, so its id stays unique
 
     def render(self, camera, people: People = None) -> tuple:
@@ -188,7 +193,8 @@ class Renderer:
                 continue
             H_tex = camera.P @ f.world_from_tex()
             shift = np.array([[1.0, 0, -x0], [0, 1.0, -y0], [0, 0, 1.0]])
-            texture = self._lit_texture(f.texture, self.light.gain(normal_out[id(f)]) * self.light.facade_level)
+            gain = self.light.gain(normal_out[id(f)]) * self.light.facade_level
+            texture = self._lit_texture(f.texture, gain, emissive_red=LIT_WINDOW_RED)
             patch = cv2.warpPerspective(texture, shift @ H_tex, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR,
                                         borderMode=cv2.BORDER_REPLICATE)
             mask = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
