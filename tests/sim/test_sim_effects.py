@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from matrix_core.sim import camera_effects
-from matrix_core.sim.camera_effects import downsample, jpeg_round_trip, supersampled_camera
+from matrix_core.sim.camera_effects import (downsample, effective_jpeg_quality, jpeg_round_trip,
+                                            supersampled_camera)
 from matrix_core.sim.config import LightingConfig, load_scene_config, scene_config_from_dict
 from matrix_core.sim.lighting import DAY, UP, sample_lighting
 from matrix_core.sim.scene import board_corners
@@ -119,8 +120,10 @@ def test_jpeg_round_trip_is_applied_with_the_drones_quality(monkeypatch):
     monkeypatch.setattr(camera_effects, 'jpeg_round_trip', lambda img, q: calls.append(q) or real(img, q))
     for k in range(3):
         sim.render_view(k)
-    assert calls == [sim.effects.drones[k].jpeg_quality for k in range(3)]
-    assert all(60 <= q <= 95 for q in calls)
+    assert calls == [effective_jpeg_quality(sim.effects.drones[k].jpeg_quality, 640) for k in range(3)]
+    assert all(60 <= sim.effects.drones[k].jpeg_quality <= 95 for k in range(3))
+    assert all(86 <= q <= 99 for q in calls)  # 640 px: a 1920-px camera's artefacts seen downsampled
+    assert effective_jpeg_quality(60, 1920) == 60
 
 
 def test_jpeg_round_trip_leaves_block_artefacts():

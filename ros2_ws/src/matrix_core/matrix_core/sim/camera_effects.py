@@ -4,6 +4,8 @@ A view is rendered at ``supersample`` times the output size through the same cam
 the pixel-centre convention) and averaged down with INTER_AREA, like a sensor integrating over its pixels; then
 optical blur, vignetting, exposure and white balance, sensor noise (Gaussian read noise plus shot noise),
 gamma/contrast and a JPEG encode/decode round trip (so the frame carries JPEG artefacts even when saved as PNG).
+Noise and JPEG quality are those of a 1920 x 1080 camera; a smaller output shows them as the downsampled
+full-resolution image would (less noise, finer artefacts: :func:`noise_std_lut`, :func:`effective_jpeg_quality`).
 
 Each drone draws its parameters once per sequence (:class:`DroneEffects`); exposure and white balance jitter a
 little per frame. Effects act on pixels only: the camera model, the id buffer and the annotations are those of
@@ -16,6 +18,8 @@ import cv2
 import numpy as np
 
 from matrix_core.geometry.camera import Camera
+
+FULL_WIDTH = 1920  # noise and JPEG quality are specified for a full-resolution (1920 x 1080) camera
 
 
 @dataclass(frozen=True)
@@ -89,8 +93,6 @@ class CameraEffects:
         self.jitter = cfg.jitter if self.enabled else 0.0
         self.drones = [sample_drone_effects(cfg, rng) for _ in range(n_drones)] if self.enabled else []
         self._noise_rngs = [np.random.default_rng(s) for s in noise_seqs]
-        self._noise_std = [np.sqrt(e.noise_sigma ** 2 + e.shot_noise * np.arange(256)).astype(np.float32)
-                           for e in self.drones]  # grey level -> noise standard deviation
         self._bank_rng = np.random.default_rng(bank_seq)
         self._banks, self._vignette = {}, {}
 
@@ -126,10 +128,10 @@ class CameraEffects:
         # random offset: drawing H*W*3 fresh normals per view would cost as much as rendering it
         bank = self._normal_bank(img.size)
         start = int(rng.integers(0, bank.size - img.size + 1))
-        std = cv2.LUT(img, self._noise_std[k])
+        std = cv2.LUT(img, noise_std_lut(e, W))
         noise = cv2.multiply(std, bank[start:start + img.size].reshape(img.shape))
         img = cv2.add(img, noise, dtype=cv2.CV_8U)
-        return jpeg_round_trip(img, e.jpeg_quality)
+        return jpeg_round_trip(img, effective_jpeg_quality(e.jpeg_quality, W))
 
     def _normal_bank(self, size: int) -> np.ndarray:
         """(2 size,) float32 standard normals, drawn once per image size."""
@@ -147,6 +149,19 @@ class CameraEffects:
             v = np.round(255.0 * (1.0 - strength * r2)).astype(np.uint8)
             self._vignette[key] = np.repeat(v[..., None], 3, axis=2)
         return self._vignette[key]
+
+
+def noise_std_lut(e: DroneEffects, width: int) -> np.ndarray:
+    """(256,) float32 noise standard deviation per grey level at an output ``width``: the sensor noise is
+    given at 1920 px and averaging the full-resolution pixels down to ``width`` divides it by 1920 / width."""
+    scale = min(1.0, width / FULL_WIDTH)
+    return (scale * np.sqrt(e.noise_sigma ** 2 + e.shot_noise * np.arange(256))).astype(np.float32)
+
+
+def effective_jpeg_quality(quality: int, width: int) -> int:
+    """JPEG quality at an output ``width`` that leaves artefacts like ``quality`` at 1920 px seen
+    downsampled: 8 x 8 blocks would be 1920 / width times coarser, so the loss (100 - quality) shrinks."""
+    return int(round(100 - (100 - quality) * min(1.0, width / FULL_WIDTH)))
 
 
 def tone_lut(gains, gamma: float, contrast: float) -> np.ndarray:
