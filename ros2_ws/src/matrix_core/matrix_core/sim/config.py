@@ -152,10 +152,10 @@ class CameraEffectsConfig:
     gamma: list = field(default_factory=lambda: [0.85, 1.15])
     contrast: list = field(default_factory=lambda: [0.9, 1.1])
     blur_sigma: list = field(default_factory=lambda: [0.0, 0.6])
-    noise_sigma: list = field(default_factory=lambda: [1.0, 4.0])  # read noise, grey levels at 1920 px
-    shot_noise: list = field(default_factory=lambda: [0.0, 0.03])  # variance per grey level at 1920 px
+    noise_sigma: list = field(default_factory=lambda: [0.5, 2.5])  # read noise, grey levels at 1920 px
+    shot_noise: list = field(default_factory=lambda: [0.0, 0.015])  # variance per grey level at 1920 px
     vignetting: list = field(default_factory=lambda: [0.0, 0.25])  # brightness loss in the corners
-    jpeg_quality: list = field(default_factory=lambda: [60, 95])  # at 1920 px
+    jpeg_quality: list = field(default_factory=lambda: [70, 95])  # at 1920 px
     jitter: float = 0.02  # relative per-frame jitter of exposure and white balance
 
     def __post_init__(self):
