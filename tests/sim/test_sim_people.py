@@ -11,7 +11,7 @@ from matrix_core.sim.crowd import ReplayCrowd
 from matrix_core.sim.ground_truth import CYLINDER_HEIGHT_M, annotation_box
 from matrix_core.sim.person_model import (PARTS, STRIDE, SWING_DEG, body_rings, gait_phase, max_reach,
                                           swing_amplitude)
-from matrix_core.sim.render import LIGHT, People
+from matrix_core.sim.render import People
 from matrix_core.sim.sequence import Simulation
 from matrix_core.sim.visibility import line_of_sight
 
@@ -164,7 +164,8 @@ def test_lit_side_is_brighter():
     and from the one opposite: the body (without the head) is brighter seen from the lit side."""
     s = Simulation(load_scene_config('simple'), seed=0, width=640, height=360)
     centre = np.array(s.config.center)
-    light_xy = LIGHT[:2] / np.linalg.norm(LIGHT[:2])
+    sun = s.renderer.light.direction
+    light_xy = sun[:2] / np.linalg.norm(sun[:2])
     cams = [s.camera(k) for k in range(len(s.views))]
     side = [float((c.center[:2] - centre) @ light_xy) / np.linalg.norm(c.center[:2] - centre) for c in cams]
     colors = np.array([[[120, 120, 120], [120, 120, 120], [120, 120, 120], [120, 120, 120]]], np.uint8)

@@ -117,6 +117,61 @@ class DroneConfig:
 
 
 @dataclass
+class LightingConfig:
+    """Per-sequence lighting randomisation (``sim/lighting.py``): each value is drawn uniformly from its
+    [low, high] range; ``dusk`` 0 is clear day, 1 evening (low weak sun, soft shadows, dark sky)."""
+
+    enabled: bool = True  # false: the fixed light of the plain scene
+    azimuth_deg: list = field(default_factory=lambda: [0.0, 360.0])
+    elevation_deg: list = field(default_factory=lambda: [25.0, 70.0])
+    sun_intensity: list = field(default_factory=lambda: [0.3, 0.55])
+    ambient: list = field(default_factory=lambda: [0.45, 0.65])
+    shadow_factor: list = field(default_factory=lambda: [0.35, 0.85])  # shadowed / lit ground brightness
+    dusk: list = field(default_factory=lambda: [0.0, 1.0])
+    dusk_facade_dimming: float = 0.55  # facades are this much darker at full dusk
+    level: list = field(default_factory=lambda: [0.85, 1.08])  # overall light level
+    tint_std: float = 0.025  # per-channel light colour spread
+
+    def __post_init__(self):
+        for name in ('azimuth_deg', 'elevation_deg', 'sun_intensity', 'ambient', 'shadow_factor', 'dusk',
+                     'level'):
+            lo_hi = getattr(self, name)
+            if len(lo_hi) != 2 or lo_hi[0] > lo_hi[1]:
+                raise ValueError(f'lighting.{name} must be [low, high], got {lo_hi}')
+        if not (0 < self.elevation_deg[0] and self.elevation_deg[1] <= 90 and 0 <= self.dusk[0]
+                and self.dusk[1] <= 1 and 0 < self.shadow_factor[0] and self.shadow_factor[1] <= 1):
+            raise ValueError(f'invalid lighting config {self}')
+
+
+@dataclass
+class CameraEffectsConfig:
+    """Per-drone camera effects (``sim/camera_effects.py``): drawn per drone and sequence from the
+    [low, high] ranges, with a small per-frame jitter. Blur sigma is in pixels of a 640-px-wide image."""
+
+    enabled: bool = True  # false: the plain pinhole render
+    supersample: float = 1.5  # render at this factor of the output size and downsample (INTER_AREA)
+    exposure: list = field(default_factory=lambda: [0.85, 1.15])  # gain
+    white_balance: list = field(default_factory=lambda: [0.94, 1.06])  # blue gain; red 2 - blue, green 1
+    gamma: list = field(default_factory=lambda: [0.85, 1.15])
+    contrast: list = field(default_factory=lambda: [0.9, 1.1])
+    blur_sigma: list = field(default_factory=lambda: [0.0, 0.6])
+    noise_sigma: list = field(default_factory=lambda: [0.5, 2.5])  # read noise, grey levels at 1920 px
+    shot_noise: list = field(default_factory=lambda: [0.0, 0.015])  # variance per grey level at 1920 px
+    vignetting: list = field(default_factory=lambda: [0.0, 0.25])  # brightness loss in the corners
+    jpeg_quality: list = field(default_factory=lambda: [70, 95])  # at 1920 px
+    jitter: float = 0.02  # relative per-frame jitter of exposure and white balance
+
+    def __post_init__(self):
+        for name in ('exposure', 'white_balance', 'gamma', 'contrast', 'blur_sigma', 'noise_sigma',
+                     'shot_noise', 'vignetting', 'jpeg_quality'):
+            lo_hi = getattr(self, name)
+            if len(lo_hi) != 2 or lo_hi[0] > lo_hi[1] or lo_hi[0] < 0:
+                raise ValueError(f'camera_effects.{name} must be [low, high] >= 0, got {lo_hi}')
+        if not 1.0 <= self.supersample <= 4.0 or not 1 <= self.jpeg_quality[0] <= self.jpeg_quality[1] <= 100:
+            raise ValueError(f'invalid camera_effects config {self}')
+
+
+@dataclass
 class SceneConfig:
     """One scene variant. ``area`` is the walkable square (x_min, y_min, x_max, y_max), internal metres."""
 
@@ -132,6 +187,8 @@ class SceneConfig:
     drones: DroneConfig = field(default_factory=DroneConfig)
     building_distance: float = 34.0  # facades stand on a square ring this far from the centre
     building_height: list = field(default_factory=lambda: [14.0, 30.0])
+    lighting: LightingConfig = field(default_factory=LightingConfig)
+    camera_effects: CameraEffectsConfig = field(default_factory=CameraEffectsConfig)
 
     def __post_init__(self):
         if self.floor not in ('cement', 'cobblestone'):
@@ -175,6 +232,8 @@ def scene_config_from_dict(data: dict) -> SceneConfig:
     data['boards'] = [_build(BoardConfig, b, f'boards[{i}]') for i, b in enumerate(data.get('boards') or [])]
     data['crowd'] = _build(CrowdConfig, data.get('crowd', {}), 'crowd')
     data['drones'] = _build(DroneConfig, data.get('drones', {}), 'drones')
+    data['lighting'] = _build(LightingConfig, data.get('lighting', {}), 'lighting')
+    data['camera_effects'] = _build(CameraEffectsConfig, data.get('camera_effects', {}), 'camera_effects')
     return _build(SceneConfig, data, 'scene')
 
 

@@ -12,6 +12,9 @@ optional dress are convex hulls of projected rings, shaded darker on the side aw
 head is a disc with hair.
 The id buffer holds ``person_id + 1`` where a person is the front-most surface and 0 elsewhere.
 
+Light, sky colour and shadow darkness come from the renderer's per-sequence
+:class:`~matrix_core.sim.lighting.Lighting` (``Renderer.light``).
+
 Convention: internal camera model (:class:`~matrix_core.geometry.camera.Camera`, ideal pinhole).
 """
 
@@ -22,13 +25,13 @@ import cv2
 import numpy as np
 
 from matrix_core.sim.appearance import LIT, SHADED
+from matrix_core.sim.lighting import DAY, UP
 from matrix_core.sim.person_model import LIT_PARTS, PARTS, RING_ANGLES, body_rings, head_centers
 from matrix_core.sim.raster import (SHIFT, clip_half_plane_2d, clip_near, fixed, project_camera_points,
                                     to_camera)
 from matrix_core.sim.scene import box_faces
 
-SKY = (235, 206, 175)
-LIGHT = np.array([0.45, 0.3, 0.84]) / np.linalg.norm([0.45, 0.3, 0.84])
+LIT_WINDOW_RED = 200  # facade texels this red are lit windows (textures.facade_texture): they glow at dusk
 
 
 @dataclass
@@ -111,10 +114,26 @@ def _draw_order(items, camera_xy) -> list:
 
 
 class Renderer:
-    """Renders views of a :class:`~matrix_core.sim.scene.Scene`."""
+    """Renders views of a :class:`~matrix_core.sim.scene.Scene` under ``light`` (a
+    :class:`~matrix_core.sim.lighting.Lighting`; shading code reads ``renderer.light``)."""
 
-    def __init__(self, scene):
+    def __init__(self, scene, light=DAY):
         self.scene = scene
+        self.light = light
+        self._lit = {}  # id(texture) -> the texture under self.light (built once per sequence)
+
+    def _lit_texture(self, texture, gain, emissive_red: int = 256) -> np.ndarray:
+        """``texture`` (H, W, 3) uint8 times the BGR ``gain`` (3,), cached: the light is fixed per sequence.
+        Texels with red >= ``emissive_red`` emit light (lit windows) and keep their colour."""
+        if self.light.plain:
+            return texture
+        key = id(texture)
+        if key not in self._lit:
+            lit = cv2.multiply(texture, tuple(float(g) for g in gain))
+            glow = texture[..., 2] >= emissive_red
+            lit[glow] = texture[glow]
+            self._lit[key] = (texture, lit)
+        return self._lit[key][1]  # the entry keeps the texture alive, so its id stays unique
 
     def render(self, camera, people: People = None) -> tuple:
         """Render one view.
@@ -147,26 +166,29 @@ class Renderer:
         rect = np.array([[-1, -1], [W, -1], [W, H], [-1, H]], dtype=float)
         ground = clip_half_plane_2d(rect, -ray_z - np.array([0.0, 0.0, 0.01]))
         top = H if len(ground) < 3 else int(np.clip(np.floor(ground[:, 1].min()), 0, H))
-        img[:top] = SKY
+        sky_bgr = self.light.sky
+        img[:top] = sky_bgr
         if top >= H:
             return
         tex, t_H_g = self.scene.ground_level_for(camera)
+        tex = self._lit_texture(tex, self.light.gain(UP))
         rows_H_img = np.array([[1.0, 0, 0], [0, 1.0, -top], [0, 0, 1.0]])  # image rows top.. -> 0..
         rows_H_tex = rows_H_img @ camera.img_H_ground(0.0) @ np.linalg.inv(t_H_g)
         cv2.warpPerspective(tex, rows_H_tex, (W, H - top), dst=img[top:], flags=cv2.INTER_LINEAR,
-                            borderMode=cv2.BORDER_CONSTANT, borderValue=SKY)
+                            borderMode=cv2.BORDER_CONSTANT, borderValue=sky_bgr)
         sky = clip_half_plane_2d(rect, ray_z + np.array([0.0, 0.0, 0.01]))
         if len(sky) >= 3:
-            cv2.fillConvexPoly(img, fixed(sky), SKY, cv2.LINE_AA, SHIFT)
+            cv2.fillConvexPoly(img, fixed(sky), sky_bgr, cv2.LINE_AA, SHIFT)
 
     def _facades(self, camera, img):
         H, W = img.shape[:2]
         c = camera.center
-        visible = []
+        visible, normal_out = [], {}
         for f in self.scene.facades:
             normal = np.cross(f.corners[3] - f.corners[0], f.corners[1] - f.corners[0])  # towards the inside
             if normal @ (c - f.corners[0]) <= 0:  # seen from behind
                 continue
+            normal_out[id(f)] = normal / np.linalg.norm(normal)
             poly = clip_near(to_camera(camera, f.corners))
             if len(poly) >= 3:
                 visible.append((-float(np.mean(poly[:, 2])), f, project_camera_points(camera.K, poly)))
@@ -177,7 +199,9 @@ class Renderer:
                 continue
             H_tex = camera.P @ f.world_from_tex()
             shift = np.array([[1.0, 0, -x0], [0, 1.0, -y0], [0, 0, 1.0]])
-            patch = cv2.warpPerspective(f.texture, shift @ H_tex, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR,
+            gain = self.light.gain(normal_out[id(f)]) * self.light.facade_level
+            texture = self._lit_texture(f.texture, gain, emissive_red=LIT_WINDOW_RED)
+            patch = cv2.warpPerspective(texture, shift @ H_tex, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR,
                                         borderMode=cv2.BORDER_REPLICATE)
             mask = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
             cv2.fillConvexPoly(mask, fixed(uv - [x0, y0]), 255, cv2.LINE_8, SHIFT)
@@ -185,6 +209,9 @@ class Renderer:
             np.copyto(roi, patch, where=mask[..., None].astype(bool))
 
     def _boards(self, camera, img):
+        white, black = (235, 235, 235), (25, 25, 25)  # paint on the ground: lit like the ground texture
+        if not self.light.plain:
+            white, black = (tuple(float(v) for v in np.multiply(c, self.light.gain(UP))) for c in (white, black))
         for board in self.scene.boards:
             n, s = board.squares, board.square_m
             g = np.arange(n + 1) * s
@@ -196,20 +223,20 @@ class Renderer:
             outline = clip_near(cam[[0, 0, -1, -1], [0, -1, -1, 0]])
             if len(outline) < 3:
                 continue
-            cv2.fillConvexPoly(img, fixed(project_camera_points(camera.K, outline)), (235, 235, 235),
-                               cv2.LINE_AA, SHIFT)
+            cv2.fillConvexPoly(img, fixed(project_camera_points(camera.K, outline)), white, cv2.LINE_AA, SHIFT)
             ok = cam[..., 2] > 0.3
             uv = project_camera_points(camera.K, np.where(ok[..., None], cam, 1.0))
             for j in range(n):
                 for i in range(j % 2, n, 2):  # square (i, j) black when i + j is even
                     if ok[j, i] and ok[j, i + 1] and ok[j + 1, i + 1] and ok[j + 1, i]:
                         quad = uv[[j, j, j + 1, j + 1], [i, i + 1, i + 1, i]]
-                        cv2.fillConvexPoly(img, fixed(quad), (25, 25, 25), cv2.LINE_AA, SHIFT)
+                        cv2.fillConvexPoly(img, fixed(quad), black, cv2.LINE_AA, SHIFT)
 
     def _shadows(self, camera, img, people):
         """Darken the ground under the sun's shadows of boxes and people (hulls of their footprint and
-        their top outline projected along :data:`LIGHT` onto z = 0); only in the shadows' bounding box."""
-        offset = -LIGHT[:2] / LIGHT[2]  # ground displacement per metre of height
+        their top outline projected along the sun direction onto z = 0); only in the shadows' bounding box."""
+        sun = self.light.direction
+        offset = -sun[:2] / sun[2]  # ground displacement per metre of height
         hulls = []
         for bounds, height, _ in self.scene.boxes:
             x0, y0, x1, y1 = bounds
@@ -237,8 +264,8 @@ class Renderer:
         for uv in polys:
             cv2.fillConvexPoly(mask, fixed(uv - [x0, y0]), 1, cv2.LINE_8, SHIFT)
         roi = img[y0:y1, x0:x1]
-        sel = mask.view(bool)
-        roi[sel] = (roi[sel].astype(np.uint16) * 160 >> 8).astype(np.uint8)  # 62 % brightness
+        dark = cv2.LUT(roi, (np.arange(256) * self.light.shadow_mult_256 >> 8).astype(np.uint8))
+        cv2.copyTo(dark, mask, roi)  # in place: roi is a view of img
 
     # ----- occluders and people ----------------------------------------------------------------------
     def _box_polys(self, camera, bounds, height, cfg):
@@ -249,7 +276,7 @@ class Renderer:
         for corners, normal in box_faces(bounds, height):
             if normal @ (c - corners[0]) <= 0:
                 continue
-            shade = base * (0.55 + 0.45 * max(0.0, float(normal @ LIGHT)))
+            shade = self.light.color(base, normal)
             faces = [(corners, shade)]
             if cfg.stripes and normal[2] == 0:
                 for z0 in np.arange(0.5, height, 1.0):
@@ -277,7 +304,8 @@ class Renderer:
         head_c, head_r_m = head_centers(people.positions, people.heights)
         hair_c = head_c + np.c_[np.zeros((len(head_c), 2)), 0.2 * head_r_m]
         head_cam = to_camera(camera, np.stack([head_c, hair_c], axis=1))  # (N, 2, 3)
-        light_xy = LIGHT[:2] / max(float(np.linalg.norm(LIGHT[:2])), 1e-9)
+        sun = self.light.direction
+        light_xy = sun[:2] / max(float(np.linalg.norm(sun[:2])), 1e-9)
         facing = np.einsum('nkrd,nkrd->nkr', normals, camera.center[:2] - rings[..., :2]) > 0
         lit = (normals @ light_xy > 0.0) & facing
         part_depth = np.linalg.norm(centers - camera.center, axis=2)  # (N, K)
@@ -300,6 +328,8 @@ class Renderer:
         colors = people.colors.astype(float)
         if colors.shape[1] < 4:  # no hair colour given: dark hair
             colors = np.concatenate([colors, np.full((len(colors), 1, 3), 25.0)], axis=1)
+        if not self.light.plain:  # albedos under DAY: the sequence's light level and colour
+            colors = colors * self.light.tint
         shaded, lit_col = (colors * SHADED).tolist(), (colors * LIT).tolist()
         head_col, hair_col = (colors[:, 2] * (SHADED + LIT) / 2).tolist(), colors[:, 3].tolist()
         out = []

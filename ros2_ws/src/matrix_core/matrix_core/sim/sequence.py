@@ -21,11 +21,13 @@ from matrix_core.datasets import MatrixWriter
 from matrix_core.datasets.matrix_conventions import view_name, world_to_position_id
 from matrix_core.datasets.types import PersonAnnotation
 from matrix_core.sim.appearance import person_looks
+from matrix_core.sim.camera_effects import CameraEffects
 from matrix_core.sim.config import load_scene_config, scene_config_to_dict
 from matrix_core.sim.crowd import Crowd, ReplayCrowd
 from matrix_core.sim.drones import DroneFleet
 from matrix_core.sim.ground_truth import annotation_box, view_truth, visible_markers
 from matrix_core.sim.person_model import gait_phase, swing_amplitude
+from matrix_core.sim.lighting import sample_lighting
 from matrix_core.sim.render import People, Renderer
 from matrix_core.sim.scene import Scene
 from matrix_core.sim.visibility import line_of_sight, rays_blocked
@@ -46,10 +48,11 @@ class Simulation:
     def __init__(self, config, seed: int, width: int, height: int, replay=None):
         self.config = config
         self.width, self.height = width, height
-        scene_rng, crowd_rng, drone_rng, look_rng = (np.random.default_rng(s)
-                                                     for s in np.random.SeedSequence(seed).spawn(4))
+        seqs = np.random.SeedSequence(seed).spawn(6)
+        scene_rng, crowd_rng, drone_rng, look_rng = (np.random.default_rng(s) for s in seqs[:4])
+        light_seq, effects_seq = seqs[5].spawn(2)  # child 5: lighting and camera effects
         self.scene = Scene(config, scene_rng, ground_m_per_px(width))
-        self.renderer = Renderer(self.scene)
+        self.renderer = Renderer(self.scene, sample_lighting(config.lighting, np.random.default_rng(light_seq)))
         if replay is not None:
             self.crowd = ReplayCrowd(replay, crowd_rng, config.crowd.height_range)
         else:
@@ -57,6 +60,7 @@ class Simulation:
         self.fleet = DroneFleet(config.drones, config.center, drone_rng)
         self.colors, self.dress = person_looks(look_rng, len(self.crowd.ids), config.crowd.dress_fraction)
         self.views = [view_name(k + 1) for k in range(config.drones.count)]
+        self.effects = CameraEffects(config.camera_effects, len(self.views), effects_seq)
 
     def step(self, seconds: float) -> None:
         self.crowd.step(seconds)
@@ -76,10 +80,16 @@ class Simulation:
     def camera(self, k: int):
         return self.fleet.camera(k, self.width, self.height)
 
+    def render_reference(self, k: int) -> tuple:
+        """(camera, image) of drone ``k``'s static reference pose: the empty scene, same camera effects."""
+        cam = self.fleet.reference_camera(k, self.width, self.height)
+        return cam, self.effects.render(self.renderer, cam, None, k)[0]
+
     def render_view(self, k: int) -> tuple:
-        """(camera, image, ids, visible (N,) bool) of view index ``k`` now."""
+        """(camera, image, ids, visible (N,) bool) of view index ``k`` now, through drone ``k``'s camera
+        effects (one call = one frame of that camera)."""
         cam = self.camera(k)
-        img, ids = self.renderer.render(cam, self.people())
+        img, ids = self.effects.render(self.renderer, cam, self.people(), k)
         visible = line_of_sight(cam, self.crowd.positions, self.scene.occluders)
         return cam, img, ids, visible
 
@@ -133,8 +143,8 @@ def simulate(settings, progress: bool = True) -> Path:
     writer = MatrixWriter(out, area=tuple(config.area), image_ext=settings.image_ext, extra_meta=meta)
     writer.write_plane_markers({int(i): p for i, p in zip(sim.scene.marker_ids, sim.scene.marker_xyz)})
     for k, view in enumerate(sim.views):
-        cam = sim.fleet.reference_camera(k, settings.width, settings.height)
-        writer.write_image(view, 0, sim.renderer.render(cam, None)[0], reference=True)
+        cam, img = sim.render_reference(k)
+        writer.write_image(view, 0, img, reference=True)
         writer.write_camera(view, 0, cam, reference=True)
     clock = SequenceClock(settings.start_time, settings.frame_period)
     bag = SequenceBagWriter(out / 'bag', sim.views, settings.compressed, clock) if settings.bag else None
