@@ -114,6 +114,25 @@ class DroneConfig:
 
 
 @dataclass
+class DistractorConfig:
+    """Per-sequence randomisation of the static scene (seeded from the sequence's child generator 4):
+    distractor objects (see ``distractors.py``) and the variety of ground materials and facades.
+    ``enabled: false`` renders the plain scene."""
+
+    enabled: bool = True
+    corner_posts: bool = True  # a post with a coloured sphere just outside each area corner
+    inside: int = 4  # thin objects (poles, bollards, posts with spheres, bins) in the walkable area
+    near: int = 12  # thin or low objects between the area and the drone ring
+    far: int = 24  # anything (trees, lamp posts, cars, benches...) beyond the drone ring
+    ground_variety: bool = True  # random floor material, colour, dirt patches and surround paving
+    facade_variety: bool = True  # dusk (lit windows) / daytime facades, shop fronts
+
+    def __post_init__(self):
+        if min(self.inside, self.near, self.far) < 0:
+            raise ValueError(f'distractor counts must be >= 0, got {self}')
+
+
+@dataclass
 class SceneConfig:
     """One scene variant. ``area`` is the walkable square (x_min, y_min, x_max, y_max), internal metres."""
 
@@ -129,6 +148,7 @@ class SceneConfig:
     drones: DroneConfig = field(default_factory=DroneConfig)
     building_distance: float = 34.0  # facades stand on a square ring this far from the centre
     building_height: list = field(default_factory=lambda: [14.0, 30.0])
+    distractors: DistractorConfig = field(default_factory=DistractorConfig)
 
     def __post_init__(self):
         if self.floor not in ('cement', 'cobblestone'):
@@ -172,6 +192,7 @@ def scene_config_from_dict(data: dict) -> SceneConfig:
     data['boards'] = [_build(BoardConfig, b, f'boards[{i}]') for i, b in enumerate(data.get('boards') or [])]
     data['crowd'] = _build(CrowdConfig, data.get('crowd', {}), 'crowd')
     data['drones'] = _build(DroneConfig, data.get('drones', {}), 'drones')
+    data['distractors'] = _build(DistractorConfig, data.get('distractors', {}), 'distractors')
     return _build(SceneConfig, data, 'scene')
 
 

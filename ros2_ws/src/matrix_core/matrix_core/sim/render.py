@@ -21,6 +21,7 @@ import numpy as np
 
 from matrix_core.sim.raster import (SHIFT, clip_half_plane_2d, clip_near, fixed, project_camera_points,
                                     to_camera)
+from matrix_core.sim.distractors import shadow_hulls
 from matrix_core.sim.scene import box_faces
 
 SKY = (235, 206, 175)
@@ -67,8 +68,8 @@ def _in_front_of_box(point_xy, bounds, camera_xy) -> bool:
 def _draw_order(items, camera_xy) -> list:
     """Indices of ``items`` (dicts with kind, depth, rect, xy/bounds) in a valid painter's order.
 
-    Only pairs whose image rectangles overlap are constrained: person/person far to near, person/box and
-    box/box by :func:`_in_front_of_box`. Ties and unconstrained items go far to near (Kahn's algorithm).
+    Only pairs whose image rectangles overlap are constrained: vertical bodies (kind 'person' or 'round', a
+    vertical distractor) among themselves far to near, body/box and box/box by :func:`_in_front_of_box`. Ties and unconstrained items go far to near (Kahn's algorithm).
     """
     n = len(items)
     rects = np.array([it['rect'] for it in items]).reshape(n, 4)
@@ -78,7 +79,7 @@ def _draw_order(items, camera_xy) -> list:
     indeg = [0] * n
     for a, b in zip(*np.nonzero(np.triu(overlap, 1))):
         ia, ib = items[a], items[b]
-        if ia['kind'] == 'person' and ib['kind'] == 'person':
+        if ia['kind'] != 'box' and ib['kind'] != 'box':
             first, second = (a, b) if ia['depth'] >= ib['depth'] else (b, a)
         elif ia['kind'] == 'box' and ib['kind'] == 'box':
             first, second = (b, a) if _in_front_of_box(ia['xy'], ib['bounds'], camera_xy) else (a, b)
@@ -213,6 +214,7 @@ class Renderer:
             ring = 0.25 * np.stack([np.cos(RING_ANGLES), np.sin(RING_ANGLES)], axis=1)
             for xy, h in zip(people.positions, people.heights):
                 hulls.append(np.concatenate([xy + ring, xy + ring * 0.6 + offset * h]))
+        hulls += shadow_hulls(self.scene.rounds, offset)
         polys = []
         for pts in hulls:
             hull = cv2.convexHull(pts.astype(np.float32)).reshape(-1, 2).astype(float)
@@ -284,9 +286,48 @@ class Renderer:
             out.append((depth, (*lo, *hi), parts))
         return out
 
+    def _round_parts(self, camera, rnd):
+        """(rect, [(kind, geometry, BGR)]) of a vertical distractor (cylinders as hulls of their end circles,
+        spheres as discs with a highlight toward the light), or None when (partly) behind the camera."""
+        ring = np.stack([np.cos(RING_ANGLES), np.sin(RING_ANGLES)], axis=1)
+        to_cam = camera.center[:2] - rnd.xy
+        to_cam /= max(float(np.linalg.norm(to_cam)), 1e-9)
+        light_xy = LIGHT[:2] / max(float(np.linalg.norm(LIGHT[:2])), 1e-9)
+        side = 0.55 + 0.4 * max(0.0, float(light_xy @ to_cam))  # brightness of the camera-facing side
+        parts, pts = [], []
+        for radius, z0, z1, color in rnd.cylinders:
+            circle = rnd.xy + radius * ring
+            world = np.concatenate([np.c_[circle, np.full(len(ring), z0)], np.c_[circle, np.full(len(ring), z1)]])
+            cam = to_camera(camera, world)
+            if cam[:, 2].min() < 0.3:
+                return None
+            uv = project_camera_points(camera.K, cam)
+            pts.append(uv)
+            hull = cv2.convexHull(uv.astype(np.float32)).reshape(-1, 2)
+            parts.append(('poly', hull, tuple(float(c) * side for c in color)))
+        for z, radius, color in rnd.spheres:
+            for center, r, shade in ((np.array([*rnd.xy, z]), radius, 0.6),
+                                     (np.array([*rnd.xy, z]) + 0.35 * radius * LIGHT, 0.55 * radius, 1.0)):
+                c_cam = to_camera(camera, center)
+                if c_cam[2] < 0.3 + radius:
+                    return None
+                uv = project_camera_points(camera.K, c_cam)
+                r_px = camera.K[0, 0] * r / c_cam[2]
+                pts.append(np.array([uv - r_px, uv + r_px]))
+                parts.append(('circle', (uv, r_px), tuple(float(c) * shade for c in color)))
+        allp = np.concatenate(pts)
+        return (*allp.min(axis=0), *allp.max(axis=0)), parts
+
     def _boxes_and_people(self, camera, img, ids, people):
         cam_xy = camera.center[:2]
         items = []
+        H, W = img.shape[:2]
+        for rnd in self.scene.rounds:
+            entry = self._round_parts(camera, rnd)
+            if entry is None or entry[0][2] < 0 or entry[0][3] < 0 or entry[0][0] > W or entry[0][1] > H:
+                continue
+            items.append({'kind': 'round', 'depth': float(np.linalg.norm(cam_xy - rnd.xy)), 'rect': entry[0],
+                          'parts': entry[1], 'xy': rnd.xy, 'id': 0})
         for bounds, height, cfg in self.scene.boxes:
             polys = self._box_polys(camera, bounds, height, cfg)
             if not polys:
@@ -311,14 +352,15 @@ class Renderer:
                     cv2.fillConvexPoly(img, pts, color, cv2.LINE_AA, SHIFT)
                     cv2.fillConvexPoly(ids, pts, 0, cv2.LINE_8, SHIFT)
                 continue
+            line = cv2.LINE_AA if it['kind'] == 'round' else cv2.LINE_8
             for kind, geom, color in it['parts']:
                 if kind == 'poly':
                     pts = fixed(geom)
-                    cv2.fillConvexPoly(img, pts, color, cv2.LINE_8, SHIFT)
+                    cv2.fillConvexPoly(img, pts, color, line, SHIFT)
                     cv2.fillConvexPoly(ids, pts, it['id'], cv2.LINE_8, SHIFT)
                 else:
                     (u, v), r = geom
                     center = (int(round(u * (1 << SHIFT))), int(round(v * (1 << SHIFT))))
                     radius = max(1, int(round(r * (1 << SHIFT))))
-                    cv2.circle(img, center, radius, color, -1, cv2.LINE_8, SHIFT)
+                    cv2.circle(img, center, radius, color, -1, line, SHIFT)
                     cv2.circle(ids, center, radius, it['id'], -1, cv2.LINE_8, SHIFT)

@@ -45,14 +45,14 @@ class Simulation:
     def __init__(self, config, seed: int, width: int, height: int, replay=None):
         self.config = config
         self.width, self.height = width, height
-        scene_rng, crowd_rng, drone_rng, look_rng = (np.random.default_rng(s)
-                                                     for s in np.random.SeedSequence(seed).spawn(4))
-        self.scene = Scene(config, scene_rng, ground_m_per_px(width))
+        children = np.random.SeedSequence(seed).spawn(6)
+        scene_rng, crowd_rng, drone_rng, look_rng = (np.random.default_rng(s) for s in children[:4])
+        self.scene = Scene(config, scene_rng, ground_m_per_px(width), np.random.default_rng(children[4]))
         self.renderer = Renderer(self.scene)
         if replay is not None:
             self.crowd = ReplayCrowd(replay, crowd_rng, config.crowd.height_range)
         else:
-            self.crowd = Crowd(config, crowd_rng)
+            self.crowd = Crowd(self.scene.crowd_config(), crowd_rng)  # distractors in the area are obstacles
         self.fleet = DroneFleet(config.drones, config.center, drone_rng)
         self.colors = person_colors(look_rng, len(self.crowd.ids))
         self.views = [view_name(k + 1) for k in range(config.drones.count)]
