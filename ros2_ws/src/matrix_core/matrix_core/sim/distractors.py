@@ -130,10 +130,12 @@ class Distractors:
             colors = rng.permutation(len(SPHERE_COLORS))
             for k, (x, y, sx, sy) in enumerate([(ax0, ay0, -1, -1), (ax1, ay0, 1, -1), (ax1, ay1, 1, 1),
                                                 (ax0, ay1, -1, 1)]):
-                off = rng.uniform(0.6, 1.2)
-                item = _round('post_sphere', np.array([x + sx * off, y + sy * off]), rng,
-                              SPHERE_COLORS[colors[k % len(colors)]])
-                self._add(item, margin=0.3)
+                for _ in range(20):  # just outside the corner, off the diagonal when a pillar stands there
+                    off = rng.uniform(0.5, 2.0, 2)
+                    item = _round('post_sphere', np.array([x + sx * off[0], y + sy * off[1]]), rng,
+                                  SPHERE_COLORS[colors[k % len(colors)]])
+                    if self._add(item, margin=0.2):
+                        break
         half_area = max(ax1 - cx, ay1 - cy)
         drones = config.drones
         ring_out = max(drones.ring_half_side, drones.reference_ring_half_side) + drones.target_xy + 0.5
