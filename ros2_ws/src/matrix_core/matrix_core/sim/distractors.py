@@ -1,7 +1,7 @@
 """Distractors: static objects the detector must learn to IGNORE, placed at random per sequence.
 
 Posts with coloured spheres (one at each area corner, as in the real scene, plus random ones), plain poles,
-lamp posts, bollards and bins are vertical bodies (:class:`Round`: stacked cylinders and spheres on one
+thick columns, lamp posts, bollards, bins and trees are vertical bodies (:class:`Round`: stacked cylinders and spheres on one
 axis, drawn like people); benches and parked cars are boxes (:class:`~matrix_core.sim.config.BoxConfig`,
 drawn, shadowed and occluding like the block). Distractors are never annotated and write 0 into the id
 buffer.
@@ -29,8 +29,9 @@ SPHERE_COLORS = [(0, 120, 245), (200, 80, 20), (190, 40, 200), (40, 170, 40), (0
                  (210, 200, 30)]
 POST_COLORS = [(30, 30, 90), (40, 40, 45), (90, 90, 95), (160, 160, 165), (30, 60, 40)]
 CAR_COLORS = [(40, 40, 45), (200, 200, 205), (60, 40, 150), (120, 70, 30), (130, 130, 135), (30, 30, 30)]
-THIN_KINDS = ('pole', 'bollard', 'post_sphere', 'bin')  # allowed inside the area and near it
-FAR_KINDS = ('tree', 'lamp', 'car', 'bench', 'pole', 'post_sphere', 'bin', 'bollard')
+THIN_KINDS = ('pole', 'bollard', 'post_sphere', 'bin')  # allowed inside the area
+NEAR_KINDS = THIN_KINDS + ('bench', 'column')  # between the area and the drone ring
+FAR_KINDS = ('tree', 'lamp', 'car', 'bench', 'pole', 'post_sphere', 'bin', 'bollard', 'column')
 
 
 @dataclass
@@ -62,6 +63,8 @@ def _round(kind: str, xy, rng: np.random.Generator, sphere_color=None) -> Round:
         return Round(kind, xy, [(rng.uniform(0.06, 0.12), 0.0, h, post)], [(h + r * 0.8, r, color)])
     if kind == 'pole':
         return Round(kind, xy, [(rng.uniform(0.05, 0.12), 0.0, rng.uniform(3.0, 6.0), post)])
+    if kind == 'column':  # like the real dark-red cylinders near the area corners (~0.5 m x 3 m)
+        return Round(kind, xy, [(rng.uniform(0.2, 0.3), 0.0, rng.uniform(2.5, 3.5), post)])
     if kind == 'lamp':
         h = rng.uniform(4.0, 6.0)
         return Round(kind, xy, [(0.08, 0.0, h, post)], [(h, rng.uniform(0.18, 0.3), (200, 235, 250))])
@@ -143,7 +146,7 @@ class Distractors:
         for _ in range(cfg.inside):
             self._place(rng, THIN_KINDS, cx, cy, 0.0, half_area - 1.0, inside=True)
         for _ in range(cfg.near):
-            self._place(rng, THIN_KINDS + ('bench',), cx, cy, half_area + 0.8, ring_out - 1.0)
+            self._place(rng, NEAR_KINDS, cx, cy, half_area + 0.8, ring_out - 1.0)
         for _ in range(cfg.far):
             self._place(rng, FAR_KINDS, cx, cy, ring_out, outer, far=True)
 
