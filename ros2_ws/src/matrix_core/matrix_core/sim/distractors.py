@@ -122,7 +122,7 @@ class Distractors:
     """
 
     def __init__(self, config, rng: np.random.Generator):
-        self.rounds, self.boxes, self.inside = [], [], []
+        self.rounds, self.boxes, self.inside, self._near_rounds = [], [], [], []
         cfg = config.distractors
         if rng is None or cfg is None or not cfg.enabled:
             return
@@ -147,8 +147,10 @@ class Distractors:
             self._place(rng, THIN_KINDS, cx, cy, 0.0, half_area - 1.0, inside=True)
         for _ in range(cfg.near):
             self._place(rng, NEAR_KINDS, cx, cy, half_area + 0.8, ring_out - 1.0)
+        n_near = len(self.rounds)
         for _ in range(cfg.far):
             self._place(rng, FAR_KINDS, cx, cy, ring_out, outer, far=True)
+        self._near_rounds = self.rounds[:n_near]
 
     def _add(self, item, margin: float) -> bool:
         box = _footprint(item)
@@ -179,9 +181,10 @@ class Distractors:
                 return
 
     def round_boxes(self) -> list:
-        """The vertical distractors as ((x0, y0, x1, y1), height) bounding boxes for line of sight (the
-        box distractors are scene boxes already)."""
-        return [(_footprint(r), r.top) for r in self.rounds]
+        """The vertical distractors within the drone ring as ((x0, y0, x1, y1), height) bounding boxes for
+        line of sight (those beyond it can never stand between a camera and the area; the box distractors
+        are scene boxes already)."""
+        return [(_footprint(r), r.top) for r in self._near_rounds]
 
     def crowd_obstacles(self, margin: float = 0.1) -> list:
         """BoxConfig footprints of the distractors inside the area, grown by ``margin`` (crowd obstacles)."""

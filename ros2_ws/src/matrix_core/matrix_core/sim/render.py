@@ -214,13 +214,13 @@ class Renderer:
             ring = 0.25 * np.stack([np.cos(RING_ANGLES), np.sin(RING_ANGLES)], axis=1)
             for xy, h in zip(people.positions, people.heights):
                 hulls.append(np.concatenate([xy + ring, xy + ring * 0.6 + offset * h]))
-        hulls += shadow_hulls(self.scene.rounds, offset)
         polys = []
         for pts in hulls:
             hull = cv2.convexHull(pts.astype(np.float32)).reshape(-1, 2).astype(float)
             cam = clip_near(to_camera(camera, np.c_[hull, np.zeros(len(hull))]))
             if len(cam) >= 3:
                 polys.append(project_camera_points(camera.K, cam))
+        polys += self._round_shadows(camera, offset)
         if not polys:
             return
         H, W = img.shape[:2]
@@ -235,6 +235,26 @@ class Renderer:
         roi = img[y0:y1, x0:x1]
         sel = mask.view(bool)
         roi[sel] = (roi[sel].astype(np.uint16) * 160 >> 8).astype(np.uint8)  # 62 % brightness
+
+    def _round_shadows(self, camera, offset) -> list:
+        """Image polygons of the vertical distractors' shadows in view (their ground hulls are static, so
+        they are computed once per light)."""
+        key = tuple(np.round(offset, 9))
+        if getattr(self, '_round_shadow_key', None) != key:
+            self._round_shadow_key = key
+            hulls = [cv2.convexHull(p.astype(np.float32)).reshape(-1, 2).astype(float)
+                     for p in shadow_hulls(self.scene.rounds, offset)]
+            self._round_shadow_hulls = [np.c_[h, np.zeros(len(h))] for h in hulls]  # (M, 3) on z = 0
+        H, W = camera.height, camera.width
+        out = []
+        for hull in self._round_shadow_hulls:
+            cam = clip_near(to_camera(camera, hull))
+            if len(cam) >= 3:
+                uv = project_camera_points(camera.K, cam)
+                lo, hi = uv.min(axis=0), uv.max(axis=0)
+                if hi[0] >= 0 and hi[1] >= 0 and lo[0] <= W and lo[1] <= H:
+                    out.append(uv)
+        return out
 
     # ----- occluders and people ----------------------------------------------------------------------
     def _box_polys(self, camera, bounds, height, cfg):
@@ -286,6 +306,24 @@ class Renderer:
             out.append((depth, (*lo, *hi), parts))
         return out
 
+    def _rounds_in_view(self, camera) -> list:
+        """The vertical distractors whose bounding cylinder may show in the image (a cheap vectorised
+        cull: axis end points in front of the camera, projected extent overlapping the image)."""
+        rounds = self.scene.rounds
+        if not rounds:
+            return []
+        if getattr(self, '_round_axes', None) is None or len(self._round_axes) != len(rounds):
+            self._round_axes = np.array([[[*r.xy, 0.0], [*r.xy, r.top]] for r in rounds])  # (N, 2, 3)
+            self._round_radii = np.array([r.radius for r in rounds])
+        cam = to_camera(camera, self._round_axes)
+        z = cam[..., 2]
+        front = (z > 0.3).all(axis=1)
+        uv = project_camera_points(camera.K, np.where(front[:, None, None], cam, 1.0))
+        r_px = camera.K[0, 0] * self._round_radii / np.maximum(z.min(axis=1), 0.3)
+        lo, hi = uv.min(axis=1) - r_px[:, None], uv.max(axis=1) + r_px[:, None]
+        keep = front & (hi[:, 0] >= 0) & (hi[:, 1] >= 0) & (lo[:, 0] <= camera.width) & (lo[:, 1] <= camera.height)
+        return [rounds[i] for i in np.flatnonzero(keep)]
+
     def _round_parts(self, camera, rnd):
         """(rect, [(kind, geometry, BGR)]) of a vertical distractor (cylinders as hulls of their end circles,
         spheres as discs with a highlight toward the light), or None when (partly) behind the camera."""
@@ -322,7 +360,7 @@ class Renderer:
         cam_xy = camera.center[:2]
         items = []
         H, W = img.shape[:2]
-        for rnd in self.scene.rounds:
+        for rnd in self._rounds_in_view(camera):
             entry = self._round_parts(camera, rnd)
             if entry is None or entry[0][2] < 0 or entry[0][3] < 0 or entry[0][0] > W or entry[0][1] > H:
                 continue
