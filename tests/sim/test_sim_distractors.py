@@ -130,3 +130,26 @@ def test_ground_and_facade_styles_vary_per_seed():
     assert styles == {'dusk', 'day'}
     a, b = (Simulation(cfg, seed=s, width=320, height=180).scene.ground_levels[0][0] for s in (1, 2))
     assert a.shape == b.shape and not np.array_equal(a, b)
+
+
+def test_marker_hidden_by_a_distractor_is_not_listed():
+    """A column standing between a camera and a board corner hides the corner in the image and drops it
+    from the listed plane points."""
+    from matrix_core.sim.ground_truth import visible_markers
+    from matrix_core.sim.visibility import rays_blocked
+
+    s = Simulation(load_scene_config('complex'), seed=2, width=640, height=360)
+    cam = s.camera(0)
+    ids, uv = visible_markers(cam, s.scene.marker_ids, s.scene.marker_xyz, s.scene.occluders, rays_blocked)
+    target = s.scene.marker_xyz[list(s.scene.marker_ids).index(ids[len(ids) // 2])]
+    toward = cam.center[:2] - target[:2]
+    xy = target[:2] + toward / np.linalg.norm(toward) * 1.5
+    column = Round('column', xy, [(0.3, 0.0, 4.0, (200.0, 30.0, 30.0))])
+    s.scene.rounds.append(column)
+    s.scene.distractors._near_rounds.append(column)
+    ids2, _ = visible_markers(cam, s.scene.marker_ids, s.scene.marker_xyz, s.scene.occluders, rays_blocked)
+    hidden = set(ids) - set(ids2)
+    assert ids[len(ids) // 2] in hidden and set(ids2) <= set(ids)
+    img, _ = s.renderer.render(cam, None)
+    u, v = np.round(uv[len(ids) // 2]).astype(int)
+    assert img[v, u, 0] > 100 and img[v, u, 2] < 80  # the column's blue, not the board

@@ -239,7 +239,7 @@ class Renderer:
     def _round_shadows(self, camera, offset) -> list:
         """Image polygons of the vertical distractors' shadows in view (their ground hulls are static, so
         they are computed once per light)."""
-        key = tuple(np.round(offset, 9))
+        key = (tuple(np.round(offset, 9)), len(self.scene.rounds))
         if getattr(self, '_round_shadow_key', None) != key:
             self._round_shadow_key = key
             hulls = [cv2.convexHull(p.astype(np.float32)).reshape(-1, 2).astype(float)
