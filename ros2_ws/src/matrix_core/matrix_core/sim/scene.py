@@ -75,11 +75,12 @@ class Scene:
         self.extent = (cx - r, cy - r, cx + r, cy + r)
         self.m_per_px = m_per_px
         dcfg = config.distractors if variety_rng is not None else None
-        # Every draw from variety_rng happens here in a fixed order, whatever the render size.
-        self.distractors = Distractors(config, variety_rng)
         on = dcfg is not None and dcfg.enabled
-        g_style = ground_style(variety_rng, config) if on and dcfg.ground_variety else None
-        self.facade_style = facade_style(variety_rng) if on and dcfg.facade_variety else None
+        # Separate streams, so that e.g. changing the distractor counts keeps the ground and the facades.
+        place_rng, ground_rng, facade_rng = (variety_rng.spawn(3) if variety_rng is not None else (None,) * 3)
+        self.distractors = Distractors(config, place_rng)
+        g_style = ground_style(ground_rng, config) if on and dcfg.ground_variety else None
+        self.facade_style = facade_style(facade_rng) if on and dcfg.facade_variety else None
         base = ground_texture(config, self.extent, m_per_px, rng, g_style)
         self.ground_levels = [(img, tex_H_ground(self.extent, m_per_px * 2 ** k))
                               for k, img in enumerate(texture_pyramid(base, 4))]

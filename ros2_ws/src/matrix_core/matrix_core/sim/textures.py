@@ -109,7 +109,7 @@ def _material_shade(material, extent, shape, m_per_px, rng, tile_m) -> np.ndarra
     if material == 'cobblestone':
         return _cobblestone_shade(extent, shape, m_per_px, rng)
     if material == 'tiles':
-        return _bond_shade(extent, shape, m_per_px, rng, tile_m, tile_m, 0.012, 8.0, -35.0, running=False)
+        return _bond_shade(extent, shape, m_per_px, rng, tile_m, tile_m, 0.012, 12.0, -22.0, running=False)
     if material == 'pavers':
         return _bond_shade(extent, shape, m_per_px, rng, 0.4, 0.2, 0.015, 14.0, -30.0)
     if material == 'asphalt':  # fine aggregate grain
