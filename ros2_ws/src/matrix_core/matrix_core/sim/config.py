@@ -122,8 +122,8 @@ class DistractorConfig:
     enabled: bool = True
     corner_posts: bool = True  # a post with a coloured sphere just outside each area corner
     inside: int = 4  # thin objects (poles, bollards, posts with spheres, bins) in the walkable area
-    near: int = 12  # thin or low objects between the area and the drone ring
-    far: int = 24  # anything (trees, lamp posts, cars, benches...) beyond the drone ring
+    near: int = 8  # thin or low objects between the area and the drone ring
+    far: int = 16  # anything (trees, lamp posts, cars, benches...) beyond the drone ring
     ground_variety: bool = True  # random floor material, colour, dirt patches and surround paving
     facade_variety: bool = True  # dusk (lit windows) / daytime facades, shop fronts
 
