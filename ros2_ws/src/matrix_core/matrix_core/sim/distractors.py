@@ -1,8 +1,8 @@
 """Distractors: static objects the detector must learn to IGNORE, placed at random per sequence.
 
-Posts with coloured spheres (one at each area corner, as in the real scene, plus random ones), plain poles,
-thick columns, lamp posts, bollards, bins and trees are vertical bodies (:class:`Round`: stacked cylinders and spheres on one
-axis, drawn like people); benches and parked cars are boxes (:class:`~matrix_core.sim.config.BoxConfig`,
+Posts with coloured spheres (one at each area corner, as in the real scene, plus random ones), plain
+poles, thick columns, lamp posts, bollards, bins and trees are vertical bodies (:class:`Round`: stacked
+cylinders and spheres on one axis, drawn like people); benches and parked cars are boxes (:class:`~matrix_core.sim.config.BoxConfig`,
 drawn, shadowed and occluding like the block). Distractors are never annotated and write 0 into the id
 buffer.
 

@@ -69,7 +69,8 @@ def _draw_order(items, camera_xy) -> list:
     """Indices of ``items`` (dicts with kind, depth, rect, xy/bounds) in a valid painter's order.
 
     Only pairs whose image rectangles overlap are constrained: vertical bodies (kind 'person' or 'round', a
-    vertical distractor) among themselves far to near, body/box and box/box by :func:`_in_front_of_box`. Ties and unconstrained items go far to near (Kahn's algorithm).
+    vertical distractor) among themselves far to near, body/box and box/box by :func:`_in_front_of_box`.
+    Ties and unconstrained items go far to near (Kahn's algorithm).
     """
     n = len(items)
     rects = np.array([it['rect'] for it in items]).reshape(n, 4)

@@ -139,4 +139,6 @@ class Scene:
     def crowd_config(self):
         """The scene config the crowd walks in: the distractors inside the area added as obstacles."""
         extra = self.distractors.crowd_obstacles()
-        return dataclasses.replace(self.config, pillars=list(self.config.pillars) + extra) if extra else self.config
+        if not extra:
+            return self.config
+        return dataclasses.replace(self.config, pillars=list(self.config.pillars) + extra)

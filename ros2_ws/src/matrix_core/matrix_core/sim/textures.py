@@ -92,14 +92,16 @@ class GroundStyle:
 def ground_style(rng: np.random.Generator, config) -> GroundStyle:
     """Draw a :class:`GroundStyle`: mostly light concrete inside like the real square, sometimes tiles,
     cobblestone or asphalt; a darker paving, asphalt or cobblestone surround."""
-    inside = str(rng.choice(['cement', 'tiles', 'cobblestone', 'asphalt', config.floor], p=[0.3, 0.3, 0.1, 0.1, 0.2]))
+    inside = str(rng.choice(['cement', 'tiles', 'cobblestone', 'asphalt', config.floor],
+                            p=[0.3, 0.3, 0.1, 0.1, 0.2]))
     base = np.asarray(config.floor_color, dtype=float)
     if inside == 'asphalt':
         base = np.full(3, rng.uniform(70, 105))
     elif inside in ('cement', 'tiles'):
         base = np.full(3, rng.uniform(150, 200)) + rng.uniform(-6, 6, 3)
     surround = str(rng.choice(['pavers', 'asphalt', 'cobblestone']))
-    s_base = np.full(3, rng.uniform(60, 100) if surround == 'asphalt' else rng.uniform(95, 145)) + rng.uniform(-8, 8, 3)
+    s_tone = rng.uniform(60, 100) if surround == 'asphalt' else rng.uniform(95, 145)
+    s_base = np.full(3, s_tone) + rng.uniform(-8, 8, 3)
     return GroundStyle(inside, tuple(base), float(rng.uniform(0.4, 1.0)), surround, tuple(s_base),
                        float(rng.uniform(8.0, 30.0)), tuple(rng.uniform([0.88, 0.94, 0.98], [0.96, 0.99, 1.02])),
                        int(rng.integers(0, 4)))
