@@ -2,9 +2,9 @@
 
 Posts with coloured spheres (one at each area corner, as in the real scene, plus random ones), plain
 poles, thick columns, lamp posts, bollards, bins and trees are vertical bodies (:class:`Round`: stacked
-cylinders and spheres on one axis, drawn like people); benches and parked cars are boxes (:class:`~matrix_core.sim.config.BoxConfig`,
-drawn, shadowed and occluding like the block). Distractors are never annotated and write 0 into the id
-buffer.
+cylinders and spheres on one axis, drawn like people); benches and parked cars are boxes
+(:class:`~matrix_core.sim.config.BoxConfig`, drawn, shadowed and occluding like the block). Distractors are
+never annotated and write 0 into the id buffer.
 
 Placement keeps the ground truth exact without special cases:
 - near the area (between its border and the drone ring) and inside it only thin or low objects stand;
