@@ -172,6 +172,25 @@ class CameraEffectsConfig:
 
 
 @dataclass
+class DistractorConfig:
+    """Per-sequence randomisation of the static scene (seeded from the sequence's child generator 4):
+    distractor objects (see ``distractors.py``) and the variety of ground materials and facades.
+    ``enabled: false`` renders the plain scene."""
+
+    enabled: bool = True
+    corner_posts: bool = True  # a post with a coloured sphere just outside each area corner
+    inside: int = 4  # thin objects (poles, bollards, posts with spheres, bins) in the walkable area
+    near: int = 8  # thin or low objects between the area and the drone ring
+    far: int = 16  # anything (trees, lamp posts, cars, benches...) beyond the drone ring
+    ground_variety: bool = True  # random floor material, colour, dirt patches and surround paving
+    facade_variety: bool = True  # dusk (lit windows) / daytime facades, shop fronts
+
+    def __post_init__(self):
+        if min(self.inside, self.near, self.far) < 0:
+            raise ValueError(f'distractor counts must be >= 0, got {self}')
+
+
+@dataclass
 class SceneConfig:
     """One scene variant. ``area`` is the walkable square (x_min, y_min, x_max, y_max), internal metres."""
 
@@ -189,6 +208,7 @@ class SceneConfig:
     building_height: list = field(default_factory=lambda: [14.0, 30.0])
     lighting: LightingConfig = field(default_factory=LightingConfig)
     camera_effects: CameraEffectsConfig = field(default_factory=CameraEffectsConfig)
+    distractors: DistractorConfig = field(default_factory=DistractorConfig)
 
     def __post_init__(self):
         if self.floor not in ('cement', 'cobblestone'):
@@ -234,6 +254,7 @@ def scene_config_from_dict(data: dict) -> SceneConfig:
     data['drones'] = _build(DroneConfig, data.get('drones', {}), 'drones')
     data['lighting'] = _build(LightingConfig, data.get('lighting', {}), 'lighting')
     data['camera_effects'] = _build(CameraEffectsConfig, data.get('camera_effects', {}), 'camera_effects')
+    data['distractors'] = _build(DistractorConfig, data.get('distractors', {}), 'distractors')
     return _build(SceneConfig, data, 'scene')
 
 

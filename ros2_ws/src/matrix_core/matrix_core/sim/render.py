@@ -29,6 +29,7 @@ from matrix_core.sim.lighting import DAY, UP
 from matrix_core.sim.person_model import LIT_PARTS, PARTS, RING_ANGLES, body_rings, head_centers
 from matrix_core.sim.raster import (SHIFT, clip_half_plane_2d, clip_near, fixed, project_camera_points,
                                     to_camera)
+from matrix_core.sim.distractors import shadow_hulls
 from matrix_core.sim.scene import box_faces
 
 LIT_WINDOW_RED = 200  # facade texels this red are lit windows (textures.facade_texture): they glow at dusk
@@ -76,8 +77,9 @@ def _in_front_of_box(point_xy, bounds, camera_xy) -> bool:
 def _draw_order(items, camera_xy) -> list:
     """Indices of ``items`` (dicts with kind, depth, rect, xy/bounds) in a valid painter's order.
 
-    Only pairs whose image rectangles overlap are constrained: person/person far to near, person/box and
-    box/box by :func:`_in_front_of_box`. Ties and unconstrained items go far to near (Kahn's algorithm).
+    Only pairs whose image rectangles overlap are constrained: vertical bodies (kind 'person' or 'round', a
+    vertical distractor) among themselves far to near, body/box and box/box by :func:`_in_front_of_box`.
+    Ties and unconstrained items go far to near (Kahn's algorithm).
     """
     n = len(items)
     rects = np.array([it['rect'] for it in items]).reshape(n, 4)
@@ -87,7 +89,7 @@ def _draw_order(items, camera_xy) -> list:
     indeg = [0] * n
     for a, b in zip(*np.nonzero(np.triu(overlap, 1))):
         ia, ib = items[a], items[b]
-        if ia['kind'] == 'person' and ib['kind'] == 'person':
+        if ia['kind'] != 'box' and ib['kind'] != 'box':
             first, second = (a, b) if ia['depth'] >= ib['depth'] else (b, a)
         elif ia['kind'] == 'box' and ib['kind'] == 'box':
             first, second = (b, a) if _in_front_of_box(ia['xy'], ib['bounds'], camera_xy) else (a, b)
@@ -252,6 +254,7 @@ class Renderer:
             cam = clip_near(to_camera(camera, np.c_[hull, np.zeros(len(hull))]))
             if len(cam) >= 3:
                 polys.append(project_camera_points(camera.K, cam))
+        polys += self._round_shadows(camera, offset)
         if not polys:
             return
         H, W = img.shape[:2]
@@ -266,6 +269,26 @@ class Renderer:
         roi = img[y0:y1, x0:x1]
         dark = cv2.LUT(roi, (np.arange(256) * self.light.shadow_mult_256 >> 8).astype(np.uint8))
         cv2.copyTo(dark, mask, roi)  # in place: roi is a view of img
+
+    def _round_shadows(self, camera, offset) -> list:
+        """Image polygons of the vertical distractors' shadows in view (their ground hulls are static, so
+        they are computed once per light)."""
+        key = (tuple(np.round(offset, 9)), len(self.scene.rounds))
+        if getattr(self, '_round_shadow_key', None) != key:
+            self._round_shadow_key = key
+            hulls = [cv2.convexHull(p.astype(np.float32)).reshape(-1, 2).astype(float)
+                     for p in shadow_hulls(self.scene.rounds, offset)]
+            self._round_shadow_hulls = [np.c_[h, np.zeros(len(h))] for h in hulls]  # (M, 3) on z = 0
+        H, W = camera.height, camera.width
+        out = []
+        for hull in self._round_shadow_hulls:
+            cam = clip_near(to_camera(camera, hull))
+            if len(cam) >= 3:
+                uv = project_camera_points(camera.K, cam)
+                lo, hi = uv.min(axis=0), uv.max(axis=0)
+                if hi[0] >= 0 and hi[1] >= 0 and lo[0] <= W and lo[1] <= H:
+                    out.append(uv)
+        return out
 
     # ----- occluders and people ----------------------------------------------------------------------
     def _box_polys(self, camera, bounds, height, cfg):
@@ -353,9 +376,68 @@ class Renderer:
             out.append((float(depth[k]), (*lo[k], *hi[k]), parts))
         return out
 
+    def _rounds_in_view(self, camera) -> list:
+        """The vertical distractors whose bounding cylinder may show in the image (a cheap vectorised
+        cull: axis end points in front of the camera, projected extent overlapping the image)."""
+        rounds = self.scene.rounds
+        if not rounds:
+            return []
+        if getattr(self, '_round_axes', None) is None or len(self._round_axes) != len(rounds):
+            self._round_axes = np.array([[[*r.xy, 0.0], [*r.xy, r.top]] for r in rounds])  # (N, 2, 3)
+            self._round_radii = np.array([r.radius for r in rounds])
+        cam = to_camera(camera, self._round_axes)
+        z = cam[..., 2]
+        front = (z > 0.3).all(axis=1)
+        uv = project_camera_points(camera.K, np.where(front[:, None, None], cam, 1.0))
+        r_px = camera.K[0, 0] * self._round_radii / np.maximum(z.min(axis=1), 0.3)
+        lo, hi = uv.min(axis=1) - r_px[:, None], uv.max(axis=1) + r_px[:, None]
+        keep = front & (hi[:, 0] >= 0) & (hi[:, 1] >= 0) & (lo[:, 0] <= camera.width) & (lo[:, 1] <= camera.height)
+        return [rounds[i] for i in np.flatnonzero(keep)]
+
+    def _round_parts(self, camera, rnd):
+        """(rect, [(kind, geometry, BGR)]) of a vertical distractor (cylinders as hulls of their end circles,
+        spheres as discs with a highlight toward the light), or None when (partly) behind the camera."""
+        ring = np.stack([np.cos(RING_ANGLES), np.sin(RING_ANGLES)], axis=1)
+        to_cam = camera.center[:2] - rnd.xy
+        to_cam /= max(float(np.linalg.norm(to_cam)), 1e-9)
+        sun = self.light.direction
+        light_xy = sun[:2] / max(float(np.linalg.norm(sun[:2])), 1e-9)
+        side = 0.55 + 0.4 * max(0.0, float(light_xy @ to_cam))  # brightness of the camera-facing side
+        tint = np.ones(3) if self.light.plain else self.light.tint  # the sequence's light level and colour
+        parts, pts = [], []
+        for radius, z0, z1, color in rnd.cylinders:
+            circle = rnd.xy + radius * ring
+            world = np.concatenate([np.c_[circle, np.full(len(ring), z0)], np.c_[circle, np.full(len(ring), z1)]])
+            cam = to_camera(camera, world)
+            if cam[:, 2].min() < 0.3:
+                return None
+            uv = project_camera_points(camera.K, cam)
+            pts.append(uv)
+            hull = cv2.convexHull(uv.astype(np.float32)).reshape(-1, 2)
+            parts.append(('poly', hull, tuple(float(c) * side * t for c, t in zip(color, tint))))
+        for z, radius, color in rnd.spheres:
+            for center, r, shade in ((np.array([*rnd.xy, z]), radius, 0.6),
+                                     (np.array([*rnd.xy, z]) + 0.35 * radius * sun, 0.55 * radius, 1.0)):
+                c_cam = to_camera(camera, center)
+                if c_cam[2] < 0.3 + radius:
+                    return None
+                uv = project_camera_points(camera.K, c_cam)
+                r_px = camera.K[0, 0] * r / c_cam[2]
+                pts.append(np.array([uv - r_px, uv + r_px]))
+                parts.append(('circle', (uv, r_px), tuple(float(c) * shade * t for c, t in zip(color, tint))))
+        allp = np.concatenate(pts)
+        return (*allp.min(axis=0), *allp.max(axis=0)), parts
+
     def _boxes_and_people(self, camera, img, ids, people):
         cam_xy = camera.center[:2]
         items = []
+        H, W = img.shape[:2]
+        for rnd in self._rounds_in_view(camera):
+            entry = self._round_parts(camera, rnd)
+            if entry is None or entry[0][2] < 0 or entry[0][3] < 0 or entry[0][0] > W or entry[0][1] > H:
+                continue
+            items.append({'kind': 'round', 'depth': float(np.linalg.norm(cam_xy - rnd.xy)), 'rect': entry[0],
+                          'parts': entry[1], 'xy': rnd.xy, 'id': 0})
         for bounds, height, cfg in self.scene.boxes:
             polys = self._box_polys(camera, bounds, height, cfg)
             if not polys:
@@ -380,14 +462,16 @@ class Renderer:
                     cv2.fillConvexPoly(img, pts, color, cv2.LINE_AA, SHIFT)
                     cv2.fillConvexPoly(ids, pts, 0, cv2.LINE_8, SHIFT)
                 continue
+            line = cv2.LINE_AA if it['kind'] == 'round' else cv2.LINE_8
             for kind, geom, color in it['parts']:
-                if kind in ('poly', 'lit'):  # geometry: fixed-point int32 hull
-                    cv2.fillConvexPoly(img, geom, color, cv2.LINE_8, SHIFT)
+                if kind in ('poly', 'lit'):  # people: fixed-point int32 hulls; round objects: float pixels
+                    pts = geom if geom.dtype == np.int32 else fixed(geom)
+                    cv2.fillConvexPoly(img, pts, color, line, SHIFT)
                     if kind == 'poly':
-                        cv2.fillConvexPoly(ids, geom, it['id'], cv2.LINE_8, SHIFT)
+                        cv2.fillConvexPoly(ids, pts, it['id'], cv2.LINE_8, SHIFT)
                 else:
                     (u, v), r = geom
                     center = (int(round(u * (1 << SHIFT))), int(round(v * (1 << SHIFT))))
                     radius = max(1, int(round(r * (1 << SHIFT))))
-                    cv2.circle(img, center, radius, color, -1, cv2.LINE_8, SHIFT)
+                    cv2.circle(img, center, radius, color, -1, line, SHIFT)
                     cv2.circle(ids, center, radius, it['id'], -1, cv2.LINE_8, SHIFT)

@@ -5,11 +5,14 @@ Convention: internal world metres. Facade quads are (4, 3) corners ordered top-l
 bottom-right, bottom-left as seen from INSIDE the square (their texture row 0 is the top).
 """
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
-from matrix_core.sim.textures import facade_texture, ground_texture, tex_H_ground, texture_pyramid
+from matrix_core.sim.distractors import Distractors
+from matrix_core.sim.textures import (facade_style, facade_texture, ground_style, ground_texture,
+                                      styled_facade_texture, tex_H_ground, texture_pyramid)
 
 # Marker id of board b's inner corner (i, j), i, j = 1..n-1: 1000 * (b + 1) + (j - 1) * (n - 1) + (i - 1).
 BOARD_MARKER_BASE = 1000
@@ -60,18 +63,29 @@ class Scene:
         config: :class:`~matrix_core.sim.config.SceneConfig`.
         rng: generator for textures and building layout.
         m_per_px: ground texture resolution (metres per texel at pyramid level 0).
+        variety_rng: generator of the per-sequence randomisation (``config.distractors``: distractor
+            objects, ground materials, facade styles); None for the plain scene.
     """
 
-    def __init__(self, config, rng: np.random.Generator, m_per_px: float):
+    def __init__(self, config, rng: np.random.Generator, m_per_px: float,
+                 variety_rng: np.random.Generator = None):
         self.config = config
         cx, cy = config.center
         r = config.building_distance + 2.0
         self.extent = (cx - r, cy - r, cx + r, cy + r)
         self.m_per_px = m_per_px
-        base = ground_texture(config, self.extent, m_per_px, rng)
+        dcfg = config.distractors if variety_rng is not None else None
+        on = dcfg is not None and dcfg.enabled
+        # Separate streams, so that e.g. changing the distractor counts keeps the ground and the facades.
+        place_rng, ground_rng, facade_rng = (variety_rng.spawn(3) if variety_rng is not None else (None,) * 3)
+        self.distractors = Distractors(config, place_rng)
+        g_style = ground_style(ground_rng, config) if on and dcfg.ground_variety else None
+        self.facade_style = facade_style(facade_rng) if on and dcfg.facade_variety else None
+        base = ground_texture(config, self.extent, m_per_px, rng, g_style)
         self.ground_levels = [(img, tex_H_ground(self.extent, m_per_px * 2 ** k))
                               for k, img in enumerate(texture_pyramid(base, 4))]
-        self.boxes = [(b.bounds, b.height, b) for b in config.obstacles]
+        self.boxes = [(b.bounds, b.height, b) for b in list(config.obstacles) + self.distractors.boxes]
+        self.rounds = self.distractors.rounds  # vertical distractors (poles, posts, trees...), see distractors.py
         self.facades, self.building_boxes = self._buildings(rng)
         self.boards = list(config.boards)
         ids, xyz = zip(*(board_corners(b, k) for k, b in enumerate(self.boards))) if self.boards else ((), ())
@@ -99,7 +113,9 @@ class Scene:
                 right_dir = np.array([-inward[1], inward[0]])
                 left, right = (a, b) if a @ right_dir < b @ right_dir else (b, a)
                 corners = np.array([[*left, h], [*right, h], [*right, 0.0], [*left, 0.0]])
-                facades.append(Facade(corners, facade_texture(rng, w, h)))
+                tex = (facade_texture(rng, w, h) if self.facade_style is None
+                       else styled_facade_texture(rng, w, h, self.facade_style))
+                facades.append(Facade(corners, tex))
                 back = np.array([a, b, a - inward * 10.0, b - inward * 10.0])
                 boxes.append(((back[:, 0].min(), back[:, 1].min(), back[:, 0].max(), back[:, 1].max()), h))
                 s += w
@@ -116,5 +132,13 @@ class Scene:
 
     @property
     def occluders(self) -> list:
-        """Every occluding box as ((x0, y0, x1, y1), height): obstacles and buildings."""
-        return [(b, h) for b, h, _ in self.boxes] + list(self.building_boxes)
+        """Every occluding box as ((x0, y0, x1, y1), height): obstacles, distractors (vertical ones by their
+        bounding square) and buildings."""
+        return ([(b, h) for b, h, _ in self.boxes] + self.distractors.round_boxes() + list(self.building_boxes))
+
+    def crowd_config(self):
+        """The scene config the crowd walks in: the distractors inside the area added as obstacles."""
+        extra = self.distractors.crowd_obstacles()
+        if not extra:
+            return self.config
+        return dataclasses.replace(self.config, pillars=list(self.config.pillars) + extra)

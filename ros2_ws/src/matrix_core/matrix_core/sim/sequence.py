@@ -51,12 +51,13 @@ class Simulation:
         seqs = np.random.SeedSequence(seed).spawn(6)
         scene_rng, crowd_rng, drone_rng, look_rng = (np.random.default_rng(s) for s in seqs[:4])
         light_seq, effects_seq = seqs[5].spawn(2)  # child 5: lighting and camera effects
-        self.scene = Scene(config, scene_rng, ground_m_per_px(width))
+        # child 4: distractors, ground materials and facade styles
+        self.scene = Scene(config, scene_rng, ground_m_per_px(width), np.random.default_rng(seqs[4]))
         self.renderer = Renderer(self.scene, sample_lighting(config.lighting, np.random.default_rng(light_seq)))
         if replay is not None:
             self.crowd = ReplayCrowd(replay, crowd_rng, config.crowd.height_range)
         else:
-            self.crowd = Crowd(config, crowd_rng)
+            self.crowd = Crowd(self.scene.crowd_config(), crowd_rng)  # distractors in the area are obstacles
         self.fleet = DroneFleet(config.drones, config.center, drone_rng)
         self.colors, self.dress = person_looks(look_rng, len(self.crowd.ids), config.crowd.dress_fraction)
         self.views = [view_name(k + 1) for k in range(config.drones.count)]

@@ -15,13 +15,16 @@ def rays_blocked(origin, targets, boxes) -> np.ndarray:
     return segments_blocked(origin, targets, [(*bounds, h) for bounds, h in boxes])
 
 
-def line_of_sight(camera, positions, boxes, sample_heights=(0.05, 0.9)) -> np.ndarray:
+def line_of_sight(camera, positions, boxes, sample_heights=(0.05, 0.9), margin_m: float = 0.05) -> np.ndarray:
     """(N,) bool: which persons standing at ``positions`` (N, 2) the camera sees.
 
     A person is visible when its foot point projects inside the image and the rays from the CURRENT camera
     centre to its axis at every height in ``sample_heights`` are not blocked by any box (block, pillars,
-    buildings). Other persons do not count as occluders (as in MATRIX's LoS files).
+    distractors, buildings) grown by ``margin_m`` sideways (a ray grazing an edge within a few centimetres
+    would put the person's rendered foot pixel on the occluder). Other persons do not count as occluders
+    (as in MATRIX's LoS files).
     """
+    boxes = [((x0 - margin_m, y0 - margin_m, x1 + margin_m, y1 + margin_m), h) for (x0, y0, x1, y1), h in boxes]
     positions = np.asarray(positions, dtype=float).reshape(-1, 2)
     n = len(positions)
     if n == 0:
