@@ -152,4 +152,5 @@ def test_marker_hidden_by_a_distractor_is_not_listed():
     assert ids[len(ids) // 2] in hidden and set(ids2) <= set(ids)
     img, _ = s.renderer.render(cam, None)
     u, v = np.round(uv[len(ids) // 2]).astype(int)
-    assert img[v, u, 0] > 100 and img[v, u, 2] < 80  # the column's blue, not the board
+    b, r = int(img[v, u, 0]), int(img[v, u, 2])
+    assert b > 60 and b - r > 40, (b, r)  # the column's blue (under this sequence's light), not the board
