@@ -194,6 +194,14 @@ class Hosts:
         return {'up': (stats['tx']['bytes'], stats['tx']['packets']),
                 'down': (stats['rx']['bytes'], stats['rx']['packets']), 'dropped': dropped}
 
+    def udp_errors(self, host: str) -> dict:
+        """The host's UDP counters of datagrams lost on receipt (/proc/net/snmp of its namespace):
+        {'RcvbufErrors': n (socket buffer full), 'InErrors': n, ...}."""
+        text = subprocess.run(['ip', 'netns', 'exec', self.ns(host), 'cat', '/proc/net/snmp'], capture_output=True,
+                              text=True, check=True).stdout
+        names, values = [line.split()[1:] for line in text.splitlines() if line.startswith('Udp:')][:2]
+        return {k: int(v) for k, v in zip(names, values) if 'Err' in k}
+
     def start(self, host: str, cmd, log: Path, env: dict = None) -> subprocess.Popen:
         """Run ``cmd`` in ``host``'s namespace, stdout and stderr to the file ``log`` (its first line: cmd)."""
         log = Path(log)
