@@ -1,10 +1,11 @@
 """System test of the distributed deployment (issue 22): two drone hosts and a ground station as network
 namespaces (matrix_bringup.netns_harness), the real sample through calib + register (on each drone host)
 and fuse (on the ground) over DDS across the links, discovery without multicast (fastdds_peers.xml, the
-MULTICAST flag of every interface off). One drone's link is cut for 5 s mid-replay and restored: nothing
+MULTICAST flag of every interface off, no multicast discovery port bound on any host). One drone's link is cut for 5 s mid-replay and restored: nothing
 crashes, every frame gets tracks, the fused views say which view was missing and why, the drone is back
 within 2 frames of its link returning, and no namespace or process is left behind."""
 
+import os
 import time
 
 import pytest
@@ -47,6 +48,8 @@ def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
         fused = lambda: {line['stamp']: line for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
                          if line['kind'] == 'fuse'}
         _wait(lambda: _stamp(2) in fused(), 240, 'frame 2 fused (start-up and discovery)', procs)
+        # discovery went unicast: nobody listens on the multicast port of the domain, the ground on its unicast
+        ports = {h: hosts.udp_ports(h) for h in hosts.hosts}
         hosts.cut(CUT)
         cut_at = time.time()
         time.sleep(5.0)   # what is tested: a 5 s outage
@@ -65,6 +68,10 @@ def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
     assert all(p.returncode == 0 for p in players.values()), logs_text
     assert not any('Traceback' in text for text in logs_text.values()), logs_text
     assert namespaces(owner_pid=int(tag[3:])) == []
+
+    domain = int(os.environ.get('ROS_DOMAIN_ID', '0'))
+    assert not any(7400 + 250 * domain in p for p in ports.values()), ports   # RTPS well-known ports
+    assert 7400 + 250 * domain + 10 in ports['ground'], ports   # the unicast discovery of participant 0
 
     lines = read_probe(logs / 'ground_probe.log')
     tracks = [line['stamp'] for line in lines if line['kind'] == 'tracks']

@@ -96,7 +96,9 @@ class Hosts:
     """The namespaces, links and processes of one run; a context manager (see the module docstring).
 
     ``drones``: host names ('D1', ...); ``rate_mbit``: tbf limit of every link (None: unlimited);
-    ``multicast``: False clears the MULTICAST flag of every interface (discovery must then go unicast).
+    ``multicast``: False adds no multicast route and clears the MULTICAST flag of every interface (as on a
+    link that does not carry multicast; the kernel still sends multicast on a veth without the flag, so a
+    test of unicast discovery also checks that nothing listens on the multicast port: :meth:`udp_ports`).
     """
 
     def __init__(self, drones, rate_mbit: float = None, multicast: bool = True):
@@ -193,6 +195,12 @@ class Hosts:
         dropped = sum(q.get('drops', 0) for q in json.loads(qdisc or '[]'))
         return {'up': (stats['tx']['bytes'], stats['tx']['packets']),
                 'down': (stats['rx']['bytes'], stats['rx']['packets']), 'dropped': dropped}
+
+    def udp_ports(self, host: str) -> set:
+        """Local UDP ports bound in the host (``ss``)."""
+        out = subprocess.run(['ip', 'netns', 'exec', self.ns(host), 'ss', '-uanH'], capture_output=True, text=True,
+                             check=True).stdout
+        return {int(line.split()[3].rsplit(':', 1)[1]) for line in out.splitlines() if line.strip()}
 
     def udp_errors(self, host: str) -> dict:
         """The host's UDP counters of datagrams lost on receipt (/proc/net/snmp of its namespace):
