@@ -10,6 +10,8 @@ multicast at all (for links that do not pass it).
 
 import os
 import sys
+import time
+from dataclasses import replace
 from pathlib import Path
 
 from matrix_bringup.deployment import GROUND, Deployment
@@ -34,23 +36,50 @@ def log_path(log_dir: Path, label: str) -> Path:
     return Path(log_dir) / (label.replace('/', '_') + '.log')
 
 
-def start(d: Deployment, hosts: Hosts, log_dir: Path, discovery: str = 'multicast', image_probes=()) -> dict:
+def start(d: Deployment, hosts: Hosts, log_dir: Path, discovery: str = 'multicast', image_probes=(),
+          player_lead_s: float = 5.0, timeout_s: float = 300.0) -> dict:
     """Start a ``link_probe`` of fuse's output on the ground (label 'ground/probe'), one of the images on each
     drone of ``image_probes`` ('Dn/probe'; its player then waits for that reader too), then the deployment's
-    processes in their hosts, the ground first and each drone's player last. Returns label -> Popen; logs
-    in ``log_dir/<label>.log`` (the probes': JSON lines, see matrix_bringup.link_probe)."""
+    processes in their hosts, the ground first. The players come last, once fuse has every drone's geometry
+    stream connected (``timeout_s``), all with the same ``start_at``, ``player_lead_s`` from then: frame k
+    leaves every drone host at the same time, as from cameras on a common clock. Returns label -> Popen;
+    logs in ``log_dir/<label>.log`` (the probes': JSON lines, see matrix_bringup.link_probe)."""
     env, procs = host_env(discovery), {}
+
+    def run(host, label, cmd):
+        procs[label] = hosts.start(host, cmd, log_path(log_dir, label), env)
+
     probe = [sys.executable, '-m', 'matrix_bringup.link_probe']
-    procs['ground/probe'] = hosts.start(GROUND, [*probe, '--fuse'], log_path(log_dir, 'ground/probe'), env)
+    run(GROUND, 'ground/probe', [*probe, '--fuse'])
     for view in image_probes:
-        procs[f'{view}/probe'] = hosts.start(view, [*probe, '--images', view], log_path(log_dir, f'{view}/probe'),
-                                             env)
-        d.hosts[view][-1].parameters['wait_for_subscribers'] += 1
+        run(view, f'{view}/probe', [*probe, '--images', view])
+    players = []
     for host in [GROUND, *d.drones]:
         for spec in d.hosts[host]:
-            cmd = [executable_path(spec.package, spec.executable), *spec.ros_args()]
-            procs[spec.label] = hosts.start(host, cmd, log_path(log_dir, spec.label), env)
+            if spec.executable == 'bag_player':
+                players.append((host, spec))
+            else:
+                run(host, spec.label, [executable_path(spec.package, spec.executable), *spec.ros_args()])
+    _wait_connected(procs, log_path(log_dir, 'fuse'), len(d.drones), timeout_s)
+    start_at = time.time() + player_lead_s
+    for host, spec in players:
+        extra = sum(1 for v in image_probes if v == host)
+        params = {**spec.parameters, 'start_at': start_at,
+                  'wait_for_subscribers': spec.parameters['wait_for_subscribers'] + extra}
+        spec = replace(spec, parameters=params)
+        run(host, spec.label, [executable_path(spec.package, spec.executable), *spec.ros_args()])
     return procs
+
+
+def _wait_connected(procs: dict, fuse_log: Path, drones: int, timeout_s: float) -> None:
+    """Until fuse logged that every drone's geometry stream connected (its images are then subscribed)."""
+    deadline = time.monotonic() + timeout_s
+    while Path(fuse_log).read_text().count('connected; images subscribed') < drones:
+        dead = {label: p.returncode for label, p in procs.items() if p.poll() is not None}
+        if dead or time.monotonic() > deadline:
+            raise RuntimeError(f'fuse did not connect to all {drones} drones ({fuse_log}); '
+                               + (f'exited: {dead}' if dead else f'after {timeout_s:g} s'))
+        time.sleep(0.2)
 
 
 def read_probe(log: Path) -> list:

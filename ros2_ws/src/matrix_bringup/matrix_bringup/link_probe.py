@@ -2,7 +2,7 @@
 stdout, each with the wall time it arrived (hosts of the harness share the machine's clock, so the lines of
 probes on two hosts compare). For tests and scripts/bench_distributed.py.
 
-    --fuse:          {"kind": "tracks", "stamp", "t", "tracks"} per /tracks and {"kind": "fuse", "stamp",
+    --fuse:          {"kind": "tracks", "stamp", "t", "ids"} per /tracks and {"kind": "fuse", "stamp",
                      "t", "views_used", "sync", "missing": {view: reason}} per fuse status on /diagnostics
     --images D1 D2:  {"kind": "image", "view", "stamp", "t", "bytes"} per /Dn/image/compressed
 """
@@ -51,7 +51,7 @@ def main(argv=None) -> int:
     node = rclpy.create_node('link_probe')
     if args.fuse:
         node.create_subscription(TrackArray, topics.TRACKS, lambda m: _emit(
-            kind='tracks', stamp=_stamp(m), tracks=len(m.tracks)), qos_by_name('history', 100))
+            kind='tracks', stamp=_stamp(m), ids=[t.id for t in m.tracks]), qos_by_name('history', 100))
         node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, _on_diagnostics, qos_by_name('history', 100))
     for view in args.images:
         node.create_subscription(CompressedImage, topics.drone_topic(view, topics.IMAGE_COMPRESSED),

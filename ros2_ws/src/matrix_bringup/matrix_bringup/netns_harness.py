@@ -171,10 +171,11 @@ class Hosts:
     def ground_end(drone: str) -> str:
         return f'gw-{drone}'
 
-    def limit(self, drone: str, rate_mbit: float, burst_kb: int = 64, latency_ms: int = 100) -> None:
-        """Token-bucket limit of the drone's link, both directions: ``rate_mbit`` Mbit/s, a ``burst_kb`` bucket,
-        packets that would wait more than ``latency_ms`` in the queue are dropped (a radio's bounded buffer)."""
-        args = ['root', 'tbf', 'rate', f'{rate_mbit}mbit', 'burst', f'{burst_kb}kb', 'latency', f'{latency_ms}ms']
+    def limit(self, drone: str, rate_mbit: float, burst_kb: int = 64, queue_kb: int = 1024) -> None:
+        """Token-bucket limit of the drone's link, both directions: ``rate_mbit`` Mbit/s, a ``burst_kb`` bucket
+        and a queue of ``queue_kb`` (a radio modem's buffer: one 1080p JPEG of ~0.7 MB and some); what does not
+        fit in the queue is dropped at the sender's end."""
+        args = ['root', 'tbf', 'rate', f'{rate_mbit}mbit', 'burst', f'{burst_kb}kb', 'limit', f'{queue_kb}kb']
         for ns, dev in ((self.ns(drone), 'eth0'), (self.ns(GROUND), self.ground_end(drone))):
             subprocess.run(['ip', 'netns', 'exec', ns, 'tc', 'qdisc', 'replace', 'dev', dev, *args], check=True,
                            capture_output=True, text=True)
