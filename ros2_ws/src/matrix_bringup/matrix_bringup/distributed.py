@@ -37,7 +37,7 @@ def log_path(log_dir: Path, label: str) -> Path:
 
 
 def start(d: Deployment, hosts: Hosts, log_dir: Path, discovery: str = 'multicast', image_probes=(),
-          player_lead_s: float = 5.0, timeout_s: float = 300.0) -> dict:
+          player_lead_s: float = 10.0, timeout_s: float = 300.0) -> dict:
     """Start a ``link_probe`` of fuse's output on the ground (label 'ground/probe'), one of the images on each
     drone of ``image_probes`` ('Dn/probe'; its player then waits for that reader too), then the deployment's
     processes in their hosts, the ground first. The players come last, once fuse has every drone's geometry
@@ -69,6 +69,15 @@ def start(d: Deployment, hosts: Hosts, log_dir: Path, discovery: str = 'multicas
         spec = replace(spec, parameters=params)
         run(host, spec.label, [executable_path(spec.package, spec.executable), *spec.ros_args()])
     return procs
+
+
+def restart(d: Deployment, hosts: Hosts, log_dir: Path, label: str, discovery: str = 'multicast'):
+    """Start the process ``label`` of the deployment again (after it was stopped), logging to
+    ``log_dir/<label>_restarted.log``."""
+    host = d.host_of(label)
+    spec = next(n for n in d.hosts[host] if n.label == label)
+    return hosts.start(host, [executable_path(spec.package, spec.executable), *spec.ros_args()],
+                       log_path(log_dir, f'{label}_restarted'), host_env(discovery))
 
 
 def _wait_connected(procs: dict, fuse_log: Path, drones: int, timeout_s: float) -> None:
