@@ -12,7 +12,7 @@ import pytest
 from matrix_bringup.netns_harness import GROUND, Hosts, namespaces, remove_stale, unavailable
 
 REASON = unavailable()
-pytestmark = pytest.mark.skipif(bool(REASON), reason=f'no network namespaces here: {REASON}')
+pytestmark = [pytest.mark.slow, pytest.mark.skipif(bool(REASON), reason=f'no network namespaces here: {REASON}')]
 
 RECEIVE = ('import socket, sys; s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM); s.bind(("", 47001)); '
            's.settimeout(float(sys.argv[1])); print(s.recv(100).decode(), flush=True)')
