@@ -7,8 +7,8 @@ limited by ``tc tbf`` to ``--rate_mbit`` (one run per rate given) with a 1 MB qu
 recorded timing (``--replay_rate`` 1 = 2 frames/s, the sample's clock), frames back and forth over the
 sample's 5 frames. Reported per rate: bytes per frame per drone across its link (each direction; the link
 counters from the players' start to the end divided by the frames played: images, geometry, diagnostics,
-DDS announcements and acknowledgements), the JPEG bytes per image, packets the limit dropped at the drones' end, latency image ->
-tracks (the first drone's image arriving at its own host -> /tracks at the ground, wall clock of one
+DDS announcements and acknowledgements), the JPEG bytes per image, packets the limit dropped at the drones'
+end, latency image -> tracks (the first drone's image arriving at its own host -> /tracks at the ground, wall clock of one
 machine), frames with tracks and frames fused with all views. A benchmark, not a CI test; needs root.
 
     python scripts/bench_distributed.py                                  # 8 drones, 20 Mbit/s, 40 frames

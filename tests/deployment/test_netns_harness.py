@@ -72,7 +72,13 @@ def hosts_pid(tag: str) -> int:
     return int(tag[3:])
 
 
-def test_teardown_on_failure_and_after_the_owner_was_killed(tmp_path):
+# A process that makes hosts, starts a sleeper in one and waits (to be stopped by the test).
+OWNER = ('import sys, time; from matrix_bringup.netns_harness import Hosts\n'
+         'h = Hosts(["D1"]).__enter__(); p = h.start("D1", ["sleep", "600"], sys.argv[1]); '
+         'print(h.tag, p.pid, flush=True); time.sleep(600)')
+
+
+def test_teardown_on_failure_on_sigterm_and_after_the_owner_was_killed(tmp_path):
     with pytest.raises(RuntimeError, match='boom'):
         with Hosts(['D1']) as hosts:
             hosts.start(GROUND, ['sleep', '600'], tmp_path / 'a.log')
@@ -80,12 +86,16 @@ def test_teardown_on_failure_and_after_the_owner_was_killed(tmp_path):
             raise RuntimeError('boom')
     assert len(inside) == 1 and _alive(inside) == [] and namespaces(owner_pid=hosts_pid(hosts.tag)) == []
 
+    # SIGTERM to the owner: it tears everything down before it exits
+    owner = subprocess.Popen([sys.executable, '-c', OWNER, str(tmp_path / 'c.log')], stdout=subprocess.PIPE, text=True)
+    tag, sleeper = owner.stdout.readline().split()
+    owner.terminate()
+    assert owner.wait(30) == 128 + 15 and _alive([int(sleeper)]) == []
+    assert namespaces(owner_pid=owner.pid) == []
+
     # An owner killed with SIGKILL cannot clean up: its processes get SIGTERM (they die with it) and the
     # next Hosts (or remove_stale) deletes its namespaces.
-    script = ('import sys, time; from matrix_bringup.netns_harness import Hosts\n'
-              'h = Hosts(["D1"]).__enter__(); p = h.start("D1", ["sleep", "600"], sys.argv[1]); '
-              'print(h.tag, p.pid, flush=True); time.sleep(600)')
-    owner = subprocess.Popen([sys.executable, '-c', script, str(tmp_path / 'b.log')], stdout=subprocess.PIPE,
+    owner = subprocess.Popen([sys.executable, '-c', OWNER, str(tmp_path / 'b.log')], stdout=subprocess.PIPE,
                              text=True)
     tag, sleeper = owner.stdout.readline().split()
     assert sorted(namespaces(owner_pid=owner.pid)) == sorted([f'{tag}-ground', f'{tag}-D1'])

@@ -52,7 +52,8 @@ def main(argv=None) -> int:
     if args.fuse:
         node.create_subscription(TrackArray, topics.TRACKS, lambda m: _emit(
             kind='tracks', stamp=_stamp(m), ids=[t.id for t in m.tracks]), qos_by_name('history', 100))
-        node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, _on_diagnostics, qos_by_name('history', 100))
+        node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, _on_diagnostics,
+                                 qos_by_name('history', 100))
     for view in args.images:
         node.create_subscription(CompressedImage, topics.drone_topic(view, topics.IMAGE_COMPRESSED),
                                  lambda m, v=view: _emit(kind='image', view=v, stamp=_stamp(m), bytes=len(m.data)),

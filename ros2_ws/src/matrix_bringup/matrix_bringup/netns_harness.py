@@ -26,6 +26,7 @@ import os
 import re
 import signal
 import subprocess
+import threading
 import time
 from pathlib import Path
 
@@ -123,7 +124,8 @@ class Hosts:
             raise RuntimeError(reason)
         remove_stale()
         atexit.register(self.close)
-        if signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None):
+        self._sigterm = signal.getsignal(signal.SIGTERM)
+        if self._sigterm in (signal.SIG_DFL, None) and threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGTERM, self._on_sigterm)
         self._up = True
         try:
@@ -258,3 +260,5 @@ class Hosts:
             for host in reversed(self.hosts):   # drones first; the ground's deletion removes the bridge
                 _ip('netns', 'delete', self.ns(host), check=False)
             atexit.unregister(self.close)
+            if signal.getsignal(signal.SIGTERM) == self._on_sigterm:
+                signal.signal(signal.SIGTERM, self._sigterm)
