@@ -8,8 +8,8 @@ recorded timing (``--replay_rate`` 1 = 2 frames/s, the sample's clock), frames b
 sample's 5 frames. Reported per rate: bytes per frame per drone across its link (each direction; the link
 counters from the players' start to the end divided by the frames played: images, geometry, diagnostics,
 DDS announcements and acknowledgements), the JPEG bytes per image, packets the limit dropped at the drones'
-end, latency image -> tracks (the first drone's image arriving at its own host -> /tracks at the ground, wall clock of one
-machine), frames with tracks and frames fused with all views. A benchmark, not a CI test; needs root.
+end, latency image -> tracks (the first drone's image arriving at its own host -> /tracks at the ground,
+wall clock of one machine), frames with tracks and frames fused with all views. A benchmark, not a CI test; needs root.
 
     python scripts/bench_distributed.py                                  # 8 drones, 20 Mbit/s, 40 frames
     python scripts/bench_distributed.py --rate_mbit 20 12 8              # the lowest rate that keeps 2 Hz
