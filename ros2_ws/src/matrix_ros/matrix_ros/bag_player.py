@@ -52,6 +52,7 @@ class BagPlayer(Node):
         self.clock_pub = self.create_publisher(Clock, '/clock', 10)
         self.released = {}  # stamp (s) -> lockstep messages seen
         self.timed_out = []  # stamps whose lockstep release never came
+        self.skipped = 0     # frames due (start_at) before the player was ready
         self.lockstep_sub = None
         if s.lockstep:
             self.lockstep_sub = self.create_subscription(message_class(s.lockstep_type), s.lockstep_topic,
@@ -100,13 +101,18 @@ class BagPlayer(Node):
             self.get_logger().info(f'waiting for a publisher on {s.lockstep_topic}')
             self._spin_for(3600, lambda: self.lockstep_sub.get_publisher_count() >= 1)
         count, previous_ns, wall_start, bag_start = 0, None, time.monotonic(), None
+        if s.start_at:   # players of several hosts release frame k together (cameras on a common clock)
+            wall_start += s.start_at - time.time()
         for time_ns, group in self.frames():
             if not rclpy.ok():
                 break
             if bag_start is None:
                 bag_start = time_ns
-            elif not s.lockstep:  # recorded timing, scaled
+            if not s.lockstep:  # recorded timing, scaled
                 due = wall_start + (time_ns - bag_start) * 1e-9 / s.rate
+                if s.start_at and time.monotonic() - due > 0.5 * self.sequence_clock.frame_period / s.rate:
+                    self.skipped += 1   # ready too late for it: a live camera publishes the present
+                    continue
                 self._spin_for(max(0.0, due - time.monotonic()))
             self.clock_pub.publish(Clock(clock=seconds_to_stamp(time_ns * 1e-9)))
             for topic, raw in group:
@@ -128,7 +134,8 @@ class BagPlayer(Node):
         self.get_logger().info(f'played {count} frames'
                                + (f' up to frame {self.sequence_clock.frame_ns(previous_ns)} '
                                   f'(t={previous_ns * 1e-9:.3f} s)' if previous_ns else '')
-                               + (f'; lockstep timed out for {len(self.timed_out)} of them' if self.timed_out else ''))
+                               + (f'; lockstep timed out for {len(self.timed_out)} of them' if self.timed_out else '')
+                               + (f'; skipped {self.skipped} frames due before it was ready' if self.skipped else ''))
         return count
 
 

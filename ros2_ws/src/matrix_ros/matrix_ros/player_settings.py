@@ -20,6 +20,10 @@ class BagPlayerSettings:
                 'transient-local publisher, as all of this workspace\'s are) or reliable (any publisher)'})
     wait_for_subscribers: int = field(default=0, metadata={
         'help': 'before the first frame, wait until every image topic has this many subscribers'})
+    start_at: float = field(default=0.0, metadata={
+        'help': 'without lockstep: wall-clock time (Unix seconds) at which the first frame is due, frame k '
+                'k periods later, so that the players of several hosts publish each frame together; frames '
+                'due before the player is ready are skipped (0: start when ready)'})
     qos: str = field(default='reliable', metadata={'help': 'QoS of the published topics: reliable or sensor_data'})
     exit_when_done: bool = field(default=True, metadata={'help': 'exit after the last frame'})
 

@@ -105,3 +105,34 @@ def test_lockstep_waits_for_the_graph(sample_bag, node_executable):
     gaps = np.diff([t for t, _ in arrivals])
     assert np.all(gaps >= 0.75), gaps  # each frame waited for the acknowledgement of the previous one
     assert 'lockstep: only' not in out
+
+
+def test_start_at_releases_frames_together_and_skips_frames_due_before_ready(sample_bag, node_executable):
+    """Players of several hosts (here: two processes, each with one drone's camera) given one ``start_at``
+    publish each frame at the same time; a player ready after its frames were due skips them."""
+    arrivals = {'D3': [], 'D5': []}
+    rclpy.init()
+    node = rclpy.create_node('start_at_test')
+    for view, got in arrivals.items():
+        node.create_subscription(CompressedImage, f'/{view}/image/compressed',
+                                 lambda m, got=got: got.append(time.time()), 10)
+    start_at = time.time() + 8.0   # the players are ready well before (a few seconds on a loaded machine)
+    players = [start_node(node_executable('matrix_ros', 'bag_player'), f'bag:={sample_bag}',
+                          f'topics:=[/{view}/image/compressed]', 'wait_for_subscribers:=1', f'start_at:={start_at}')
+               for view in arrivals]
+    late = start_node(node_executable('matrix_ros', 'bag_player'), f'bag:={sample_bag}',
+                      'topics:=[/D1/ground_truth/camera_info]',
+                      f'start_at:={time.time() - 10.0}')   # every frame was due 8-10 s before it is ready
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and any(p.poll() is None for p in players):
+        rclpy.spin_once(node, timeout_sec=0.02)
+    outs = [finish(p, 10) for p in players]
+    late_out = finish(late, 30)
+    node.destroy_node()
+    rclpy.shutdown()
+    assert [p.returncode for p in players] == [0, 0], outs
+    d3, d5 = np.array(arrivals['D3']), np.array(arrivals['D5'])
+    assert len(d3) == len(d5) == 5, outs
+    assert d3[0] >= start_at - 0.05 and np.abs(d3 - d5).max() < 0.3, (d3 - start_at, d5 - start_at)
+    assert np.diff(d3) == pytest.approx(0.5, abs=0.2)   # the recorded timing from start_at on
+    assert late.returncode == 1 and 'skipped 5 frames due before it was ready' in late_out, late_out

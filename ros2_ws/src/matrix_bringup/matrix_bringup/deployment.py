@@ -1,0 +1,129 @@
+"""The graph deployed over hosts, as data: one computer per drone and a ground station, and what crosses each
+drone's link, with the QoS of each stream and why. Built from the same :class:`~matrix_bringup.graph.GraphSettings`
+and :func:`~matrix_bringup.graph.graph_nodes` as the one-host graph; pure Python (tested with plain pytest).
+
+    drone host Dn:  bag_player (only Dn's camera: image/compressed, ground_truth/camera_info)
+                    register, calib (namespace /Dn: bare stream names)
+         | link Dn: up   image/compressed (best effort), homography, camera_info, pose, /diagnostics (reliable)
+         |          down nothing but DDS discovery and acknowledgements
+    ground host:    fuse, recorder, graph_monitor
+
+Differences from the one-host graph, each for the link: images cross compressed only (a raw 1080p frame is
+6.2 MB, 2.5 s at 20 Mbit/s); fuse reads them best effort (``qos: sensor_data``), so a slow or cut link drops
+frames instead of queueing old ones (a frame that arrives after its stamp was fused is refused anyway); the
+players run on the recorded timing (``lockstep`` off: a camera does not wait for the ground) and every host
+on its own clock (``use_sim_time`` off: no ``/clock`` across links; stamps are the bag's).
+"""
+
+from dataclasses import dataclass, replace
+
+from matrix_bringup.graph import BagFacts, GraphSettings, NodeSpec, graph_nodes
+from matrix_core import topics
+
+GROUND = 'ground'
+UP, DOWN = 'drone -> ground', 'ground -> drone'
+
+
+@dataclass(frozen=True)
+class LinkStream:
+    """One stream across a drone's link: ``topic`` relative to the drone (``topics.drone_topic``) or absolute."""
+
+    topic: str
+    msg_type: str
+    direction: str
+    reliability: str     # 'best_effort' or 'reliable' (what the ground readers ask for)
+    readers: tuple       # ground processes that subscribe it
+    why: str
+
+
+# Every per-drone stream a ground process may read: (stream, type, reliability, why).
+STREAMS = {
+    topics.IMAGE_COMPRESSED: (topics.COMPRESSED_TYPE, 'best_effort', (
+        'the largest stream (a JPEG of 1080p, ~0.7 MB): best effort, so a lost fragment loses that frame and '
+        'a slow link drops old frames instead of queueing them; fuse wants the newest frame only')),
+    topics.HOMOGRAPHY: (topics.HOMOGRAPHY_TYPE, 'reliable', (
+        'tiny (~0.3 kB) and the geometry of its image: without it the view is missing for that frame')),
+    topics.CAMERA_INFO: (topics.CAMERA_INFO_TYPE, 'reliable', 'tiny; the calibration of each frame'),
+    topics.POSE: (topics.POSE_TYPE, 'reliable', 'tiny; recorded for evaluation'),
+    topics.GROUND_TRUTH_CAMERA_INFO: (topics.CAMERA_INFO_TYPE, 'reliable', 'tiny; only the monitor reads it'),
+    topics.DIAGNOSTICS_TOPIC: ('diagnostic_msgs/msg/DiagnosticArray', 'reliable', (
+        "calib's and register's status per frame (~1 kB): why a view failed, recorded on the ground")),
+}
+
+
+@dataclass
+class Deployment:
+    """``hosts``: host name ('D1', ..., 'ground') -> its processes, in start order (the player last);
+    ``links``: drone -> the streams crossing its link."""
+
+    hosts: dict
+    links: dict
+
+    @property
+    def drones(self) -> list:
+        return [h for h in self.hosts if h != GROUND]
+
+    def host_of(self, label: str) -> str:
+        return next(h for h, nodes in self.hosts.items() if any(n.label == label for n in nodes))
+
+    def describe(self) -> str:
+        """The layout as text (README, ``bench_distributed.py --layout``)."""
+        lines = []
+        for host, nodes in self.hosts.items():
+            lines.append(f'{host}: ' + ', '.join(n.label for n in nodes))
+        for drone, streams in self.links.items():
+            for st in streams:
+                lines.append(f'  link {drone} {st.direction}: {st.topic} [{st.msg_type}] {st.reliability} '
+                             f'-> {", ".join(st.readers)}: {st.why}')
+        return '\n'.join(lines)
+
+
+def deployment(s: GraphSettings, bag: BagFacts = None) -> Deployment:
+    """The graph of ``s`` on one host per drone plus the ground station (see the module docstring)."""
+    if s.drones_per_process != 1:
+        raise ValueError('a deployment runs one drone per host: drones_per_process must be 1')
+    bag = bag or BagFacts.read(s.bag, s.views)
+    if not bag.compressed:
+        raise ValueError('a deployment sends compressed images over the links, never raw 1080p: '
+                         'write the bag with compressed images (matrix-tracker bag ... --compressed)')
+    nodes = [_on_wall_clock(n) for n in graph_nodes(replace(s, lockstep=False), bag)]
+    player = nodes.pop()
+    hosts = {v: [n for n in nodes if n.namespace == v] for v in s.views}
+    hosts[GROUND] = [n for n in nodes if n.namespace not in s.views]
+    hosts[GROUND] = [replace(n, parameters={**n.parameters, 'qos': 'sensor_data'}) if n.executable == 'fuse' else n
+                     for n in hosts[GROUND]]   # fuse reads the images best effort over the link (STREAMS)
+    for v in s.views:
+        own = [topics.absolute(v, topics.IMAGE_COMPRESSED)]   # as its camera would: this drone's streams only
+        if bag.has_ground_truth:
+            own.append(topics.absolute(v, topics.GROUND_TRUTH_CAMERA_INFO))
+        hosts[v].append(NodeSpec(player.package, player.executable, player.name, v,
+                                 {**player.parameters, 'topics': own}))
+    return Deployment(hosts, {v: _link_streams(v, hosts[GROUND]) for v in s.views})
+
+
+def _on_wall_clock(node: NodeSpec) -> NodeSpec:
+    return replace(node, parameters={**node.parameters, 'use_sim_time': False}) \
+        if 'use_sim_time' in node.parameters else node
+
+
+def ground_reads(node: NodeSpec, view: str) -> list:
+    """The per-drone streams (``STREAMS`` keys) a ground process subscribes for ``view``."""
+    p = node.parameters
+    if node.executable == 'fuse':
+        geometry = topics.HOMOGRAPHY if p.get('input_kind') == 'homography' else topics.CAMERA_INFO
+        return [topics.IMAGE_COMPRESSED, geometry]
+    if node.executable == 'recorder':
+        recorded = set(p.get('topics', ()))
+        return [st for st in STREAMS if topics.absolute(view, st) in recorded or st in recorded]
+    if node.executable == 'graph_monitor':
+        return [topics.GROUND_TRUTH_CAMERA_INFO, topics.CAMERA_INFO, topics.HOMOGRAPHY, topics.DIAGNOSTICS_TOPIC]
+    return []
+
+
+def _link_streams(view: str, ground: list) -> list:
+    readers = {}
+    for node in ground:
+        for st in ground_reads(node, view):
+            readers.setdefault(st, []).append(node.label)
+    return [LinkStream(st if st.startswith('/') else topics.drone_topic(view, st), STREAMS[st][0], UP,
+                       STREAMS[st][1], tuple(readers[st]), STREAMS[st][2]) for st in STREAMS if st in readers]

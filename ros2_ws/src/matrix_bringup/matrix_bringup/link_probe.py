@@ -1,0 +1,73 @@
+"""``python -m matrix_bringup.link_probe``: what a host of a distributed run sees, one JSON line per message on
+stdout, each with the wall time it arrived (hosts of the harness share the machine's clock, so the lines of
+probes on two hosts compare). For tests and scripts/bench_distributed.py.
+
+    --fuse:          {"kind": "tracks", "stamp", "t", "ids"} per /tracks and {"kind": "fuse", "stamp",
+                     "t", "views_used", "sync", "missing": {view: reason}} per fuse status on /diagnostics
+    --images D1 D2:  {"kind": "image", "view", "stamp", "t", "bytes"} per /Dn/image/compressed
+"""
+
+import argparse
+import json
+import sys
+import time
+
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from diagnostic_msgs.msg import DiagnosticArray
+from matrix_msgs.msg import TrackArray
+from sensor_msgs.msg import CompressedImage
+
+from matrix_core import topics
+from matrix_ros.conversions import stamp_to_seconds
+from matrix_ros.qos import qos_by_name
+
+
+def _emit(**line) -> None:
+    print(json.dumps({**line, 't': round(time.time(), 4)}), flush=True)
+
+
+def _stamp(msg) -> float:
+    return round(stamp_to_seconds(msg.header.stamp), 6)
+
+
+def _on_diagnostics(msg) -> None:
+    by_name = {s.name: s for s in msg.status}
+    if 'fuse' not in by_name:
+        return
+    values = {kv.key: kv.value for kv in by_name['fuse'].values}
+    missing = {s.hardware_id: s.message for name, s in by_name.items()
+               if name.startswith('fuse/') and s.message != 'used'}
+    _emit(kind='fuse', stamp=_stamp(msg), views_used=int(values['views_used']), sync=values['sync'],
+          missing=missing)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('--fuse', action='store_true', help="fuse's tracks and diagnostics")
+    parser.add_argument('--images', nargs='*', default=[], help='drones whose compressed images to log')
+    args = parser.parse_args(argv)
+    rclpy.init()
+    node = rclpy.create_node('link_probe')
+    if args.fuse:
+        node.create_subscription(TrackArray, topics.TRACKS, lambda m: _emit(
+            kind='tracks', stamp=_stamp(m), ids=[t.id for t in m.tracks]), qos_by_name('history', 100))
+        node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, _on_diagnostics,
+                                 qos_by_name('history', 100))
+    for view in args.images:
+        node.create_subscription(CompressedImage, topics.drone_topic(view, topics.IMAGE_COMPRESSED),
+                                 lambda m, v=view: _emit(kind='image', view=v, stamp=_stamp(m), bytes=len(m.data)),
+                                 qos_by_name('sensor_data'))
+    print(json.dumps({'kind': 'ready'}), flush=True)
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,134 @@
+#!/usr/bin/env python3
+"""Distributed deployment benchmark (issue 22): the real sample over limited links, one host per drone.
+
+Each drone host (a network namespace, matrix_bringup.netns_harness) runs its own camera (the bag player with
+only its streams), register and calib; the ground host runs fuse and the recorder; every drone's link is
+limited by ``tc tbf`` to ``--rate_mbit`` (one run per rate given) with a 1 MB queue. The replay runs on the
+recorded timing (``--replay_rate`` 1 = 2 frames/s, the sample's clock), frames back and forth over the
+sample's 5 frames. Reported per rate: bytes per frame per drone across its link (each direction; the link
+counters from the players' start to the end divided by the frames played: images, geometry, diagnostics,
+DDS announcements and acknowledgements), the JPEG bytes per image, packets the limit dropped at the drones'
+end, latency image -> tracks (the first drone's image arriving at its own host -> /tracks at the ground,
+wall clock of one machine), frames with tracks and frames fused with all views. A benchmark, not a CI test; needs root.
+
+    python scripts/bench_distributed.py                                  # 8 drones, 20 Mbit/s, 40 frames
+    python scripts/bench_distributed.py --rate_mbit 20 12 8              # the lowest rate that keeps 2 Hz
+    python scripts/bench_distributed.py --drones 2 --frames 10 --replay_rate 0.5   # a short run
+    python scripts/bench_distributed.py --layout                         # what runs where, what crosses
+"""
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run_once(args, bag: Path, views: list, rate_mbit: float, out: Path) -> dict:
+    from matrix_bringup.deployment import deployment
+    from matrix_bringup.distributed import read_probe, start
+    from matrix_bringup.graph import BagFacts, GraphSettings
+    from matrix_bringup.netns_harness import GROUND, Hosts
+
+    settings = GraphSettings(bag=str(bag), dataset=str(args.dataset), views=views, lockstep=False,
+                             rate=args.replay_rate, sync_timeout=args.sync_timeout, record=str(out / 'rec'))
+    d = deployment(settings, BagFacts.read(str(bag), views))
+    logs = out / 'logs'
+    with Hosts(views, rate_mbit=rate_mbit) as hosts:
+        procs = start(d, hosts, logs, args.discovery, image_probes=views[:1])
+        before = {v: hosts.link_bytes(v) for v in views}   # discovery of all but the players is done
+        players = [p for label, p in procs.items() if label.endswith('bag_player')]
+        deadline = time.monotonic() + args.timeout
+        while any(p.poll() is None for p in players) and time.monotonic() < deadline:
+            time.sleep(0.5)
+        last = round(1.0 + 0.5 * (args.frames - 1), 6)   # the bag's sequence clock
+        deadline = time.monotonic() + 30.0   # the last frame, queued on a slow link, is fused (or times out)
+        while time.monotonic() < deadline and not any(
+                line['kind'] == 'fuse' and line['stamp'] == last for line in read_probe(logs / 'ground_probe.log')):
+            time.sleep(0.5)
+        time.sleep(1.0)   # the recorder writes it
+        after = {v: hosts.link_bytes(v) for v in views}
+        udp = hosts.udp_errors(GROUND)
+        hosts.stop_all()
+    played = len(args.frame_list)
+    fused = {line['stamp']: line for line in read_probe(logs / 'ground_probe.log') if line['kind'] == 'fuse'}
+    tracks = {line['stamp']: line['t'] for line in read_probe(logs / 'ground_probe.log') if line['kind'] == 'tracks'}
+    images = {line['stamp']: line for line in read_probe(logs / f'{views[0]}_probe.log') if line['kind'] == 'image'}
+    latency = np.array([tracks[s] - images[s]['t'] for s in images if s in tracks])
+    return {
+        'rate_mbit': rate_mbit, 'frames': played, 'with_tracks': len(tracks),
+        'all_views': sum(f['views_used'] == len(views) for f in fused.values()),
+        'up_kb': np.mean([(after[v]['up'][0] - before[v]['up'][0]) / played / 1e3 for v in views]),
+        'down_kb': np.mean([(after[v]['down'][0] - before[v]['down'][0]) / played / 1e3 for v in views]),
+        'jpeg_kb': np.mean([i['bytes'] for i in images.values()]) / 1e3 if images else float('nan'),
+        'dropped': sum(after[v]['dropped'] for v in views), 'rcvbuf_errors': udp.get('RcvbufErrors', 0),
+        'latency': latency, 'players_ok': all(p.returncode == 0 for p in players)}
+
+
+def print_table(rows: list, views: list, args) -> None:
+    print(f'\n{len(views)} drone hosts + ground, real sample frames back and forth, {len(args.frame_list)} frames '
+          f'at {2 * args.replay_rate:g} frames/s, discovery {args.discovery}, sync_timeout {args.sync_timeout} s')
+    print('| Mbit/s per link | bytes/frame/drone up (down) | JPEG per image | tbf drops | latency image -> tracks '
+          'median / p95 / max | frames with tracks | fused with all views |')
+    print('| --- | --- | --- | --- | --- | --- | --- |')
+    for r in rows:
+        lat = r['latency']
+        lat_text = (f'{np.median(lat) * 1e3:.0f} / {np.percentile(lat, 95) * 1e3:.0f} / {lat.max() * 1e3:.0f} ms'
+                    if len(lat) else 'none')
+        print(f"| {r['rate_mbit']:g} | {r['up_kb']:.0f} kB ({r['down_kb']:.1f} kB) | {r['jpeg_kb']:.0f} kB | "
+              f"{r['dropped']} | {lat_text} | {r['with_tracks']}/{r['frames']} | {r['all_views']}/{r['frames']} |")
+    print(f"(ground UDP receive-buffer errors: {', '.join(str(r['rcvbuf_errors']) for r in rows)}; "
+          f"players finished: {', '.join(str(r['players_ok']) for r in rows)})")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('--dataset', type=Path, default=Path(os.environ.get('MATRIX_SHARED', ROOT.parent / 'shared'))
+                        / 'matrix_sample', help='the real sample (default: $MATRIX_SHARED/matrix_sample)')
+    parser.add_argument('--drones', type=int, default=8, help='drone hosts D1..Dn (default 8)')
+    parser.add_argument('--rate_mbit', type=float, nargs='+', default=[20.0], help='link rates, one run each')
+    parser.add_argument('--frames', type=int, default=40, help='frames replayed (default 40: 20 s at 2 Hz)')
+    parser.add_argument('--replay_rate', type=float, default=1.0, help='1 = the recorded 2 frames/s')
+    parser.add_argument('--sync_timeout', type=float, default=1.0, help="fuse's wait for a late view (s)")
+    parser.add_argument('--discovery', choices=('multicast', 'peers'), default='multicast')
+    parser.add_argument('--timeout', type=float, default=600.0, help='seconds a run may take')
+    parser.add_argument('--out', type=Path, default=ROOT / 'out' / 'bench_distributed')
+    parser.add_argument('--layout', action='store_true', help='print what runs where and what crosses each link')
+    args = parser.parse_args(argv)
+
+    from matrix_bringup.distributed import back_and_forth, write_replay_bag
+    from matrix_bringup.netns_harness import unavailable
+    from matrix_core.datasets.matrix_conventions import MATRIX_VIEWS
+
+    views = list(MATRIX_VIEWS)[:args.drones]
+    args.frame_list = back_and_forth(5, args.frames)
+    if args.layout:
+        from matrix_bringup.deployment import deployment
+        from matrix_bringup.graph import BagFacts, GraphSettings
+        facts = BagFacts(compressed=True, frames=args.frames, has_ground_truth=True)
+        print(deployment(GraphSettings(bag='BAG', dataset=str(args.dataset), views=views, record='REC'), facts)
+              .describe())
+        return 0
+    reason = unavailable()
+    if reason:
+        print(f'bench_distributed: skipped: {reason}')
+        return 0
+    bag = args.out / 'bag'
+    if not bag.exists():
+        args.out.mkdir(parents=True, exist_ok=True)
+        write_replay_bag(args.dataset, bag, views, args.frame_list)
+    rows = []
+    for rate in args.rate_mbit:
+        run_dir = args.out / f'{rate:g}mbit_{time.strftime("%H%M%S")}'
+        rows.append(run_once(args, bag, views, rate, run_dir))
+        print(f'{rate:g} Mbit/s: logs in {run_dir}/logs', flush=True)
+    print_table(rows, views, args)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

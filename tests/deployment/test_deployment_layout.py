@@ -1,0 +1,74 @@
+"""The deployment layout (matrix_bringup.deployment): one host per drone and a ground station, built from the
+one-host graph; what crosses each link and with which QoS. Pure data: no process, no bag is read."""
+
+import pytest
+
+from matrix_bringup.deployment import DOWN, GROUND, STREAMS, UP, deployment
+from matrix_bringup.graph import BagFacts, GraphSettings, graph_nodes
+
+FACTS = BagFacts(compressed=True, frames=5, has_ground_truth=True)
+VIEWS = ['D1', 'D2', 'D3']
+
+
+@pytest.fixture
+def settings(matrix_sample):
+    return lambda **kw: GraphSettings(bag='/data/bag', dataset=str(matrix_sample), views=VIEWS, **kw)
+
+
+def test_each_drone_host_runs_its_own_camera_register_and_calib(settings):
+    d = deployment(settings(record='/out/rec', monitor=True), FACTS)
+    assert list(d.hosts) == [*VIEWS, GROUND] and d.drones == VIEWS
+    for v in VIEWS:
+        assert [n.label for n in d.hosts[v]] == [f'{v}/calib', f'{v}/register', f'{v}/bag_player']
+        calib, register, player = d.hosts[v]
+        assert calib.parameters['views'] == register.parameters['views'] == [v]
+        # the camera of this drone only, compressed, on the recorded timing (a camera does not wait)
+        assert player.parameters['topics'] == [f'/{v}/image/compressed', f'/{v}/ground_truth/camera_info']
+        assert player.parameters['lockstep'] is False and 'lockstep_topic' not in player.parameters
+        assert player.parameters['wait_for_subscribers'] == 3   # calib, register here; fuse across the link
+    assert [n.label for n in d.hosts[GROUND]] == ['fuse', 'recorder', 'graph_monitor']
+    assert d.host_of('D2/register') == 'D2' and d.host_of('fuse') == GROUND
+    # no /clock across links: every host on its own clock
+    assert not any(n.parameters.get('use_sim_time') for nodes in d.hosts.values() for n in nodes)
+
+
+def test_the_same_processes_as_the_one_host_graph(settings):
+    s = settings(record='/out/rec')
+    one_host = [n.label for n in graph_nodes(s, FACTS)]
+    deployed = [n.label for nodes in deployment(s, FACTS).hosts.values() for n in nodes]
+    players = [f'{v}/bag_player' for v in VIEWS]
+    assert sorted(deployed) == sorted([label for label in one_host if label != 'bag_player'] + players)
+
+
+def test_what_crosses_each_link_and_its_qos(settings):
+    d = deployment(settings(record='/out/rec', monitor=True), FACTS)
+    assert list(d.links) == VIEWS
+    link = {st.topic: st for st in d.links['D2']}
+    assert set(link) == {'D2/image/compressed', 'D2/homography', 'D2/camera_info', 'D2/pose',
+                         'D2/ground_truth/camera_info', '/diagnostics'}
+    assert all(st.direction == UP for st in link.values())   # the ground sends nothing back but acks
+    assert not any(st.direction == DOWN for streams in d.links.values() for st in streams)
+    image = link['D2/image/compressed']
+    assert image.reliability == 'best_effort' and image.readers == ('fuse',) and 'old frames' in image.why
+    assert link['D2/homography'].reliability == 'reliable'
+    assert set(link['D2/homography'].readers) == {'fuse', 'recorder', 'graph_monitor'}
+    assert all(st.reliability == 'reliable' for t, st in link.items() if t != 'D2/image/compressed')
+    assert all(st.why for st in link.values())
+    # the fuse process asks for what the link table says: its image subscriptions best effort
+    fuse = next(n for n in d.hosts[GROUND] if n.executable == 'fuse')
+    assert fuse.parameters['qos'] == 'sensor_data' and fuse.parameters['image_kind'] == 'compressed'
+    assert 'D2/image/compressed' in d.describe() and 'best_effort' in d.describe()
+
+
+def test_never_raw_images_and_a_minimal_link(settings):
+    assert all('image_raw' not in st for st in STREAMS)
+    with pytest.raises(ValueError, match='never raw 1080p'):
+        deployment(settings(), BagFacts(compressed=False, frames=5, has_ground_truth=True))
+    with pytest.raises(ValueError, match='one drone per host'):
+        deployment(settings(drones_per_process=2), FACTS)
+    # without recorder and monitor only what fuse needs crosses: the image and its geometry
+    d = deployment(settings(), BagFacts(compressed=True, frames=5, has_ground_truth=False))
+    assert [st.topic for st in d.links['D1']] == ['D1/image/compressed', 'D1/homography']
+    assert d.hosts['D1'][-1].parameters['topics'] == ['/D1/image/compressed']
+    d = deployment(settings(input_kind='camera_info'), FACTS)
+    assert [st.topic for st in d.links['D3']] == ['D3/image/compressed', 'D3/camera_info']

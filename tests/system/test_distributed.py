@@ -1,0 +1,159 @@
+"""System tests of the distributed deployment (issue 22): two drone hosts and a ground station as network
+namespaces (matrix_bringup.netns_harness), the real sample through calib + register (on each drone host)
+and fuse (on the ground) over DDS across the links; no namespace or process is left behind.
+
+- One drone's link cut for 5 s mid-replay and restored, discovery without multicast (fastdds_peers.xml,
+  the MULTICAST flag of every interface off, no multicast discovery port bound on any host): nothing
+  crashes, every frame gets tracks, the fused views say which view was missing and why, and the drone is
+  back within 2 frames of its link returning.
+- One drone's link throttled below its image rate, and the ground's fuse process restarted mid-run
+  (multicast discovery): latency stays bounded (the link's queue drops at the sender, nothing queues
+  without end), and the restarted fuse resumes with fresh tracks."""
+
+import os
+import time
+
+import pytest
+
+from matrix_bringup.deployment import deployment
+from matrix_bringup.distributed import back_and_forth, read_probe, restart, start, write_replay_bag
+from matrix_bringup.graph import BagFacts, GraphSettings
+from matrix_bringup.netns_harness import Hosts, namespaces, unavailable
+
+REASON = unavailable()
+pytestmark = [pytest.mark.ros, pytest.mark.slow,
+              pytest.mark.skipif(bool(REASON), reason=f'no network namespaces here: {REASON}')]
+VIEWS, CUT = ['D1', 'D5'], 'D5'
+FRAMES = 14          # back and forth over the sample's 5 frames
+RATE = 0.5           # 1 s per frame: calib, register and fuse keep up on two loaded cores
+PERIOD = 0.5 / RATE  # wall seconds between frames
+
+
+def _stamp(k: int) -> float:
+    return round(1.0 + 0.5 * k, 6)   # the sequence clock of a written bag
+
+
+def _wait(condition, timeout_s, what, procs):
+    deadline = time.monotonic() + timeout_s
+    while not condition():
+        dead = {label: p.returncode for label, p in procs.items() if p.poll() not in (None, 0)}
+        assert not dead, f'{dead} exited while waiting for {what}'
+        assert time.monotonic() < deadline, f'after {timeout_s} s still waiting for {what}'
+        time.sleep(0.1)
+
+
+def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
+    bag = write_replay_bag(matrix_sample, tmp_path / 'bag', VIEWS, back_and_forth(5, FRAMES))
+    settings = GraphSettings(bag=str(bag), dataset=str(matrix_sample), views=VIEWS, lockstep=False, rate=RATE,
+                             sync_timeout=1.5, record=str(tmp_path / 'rec'))
+    d = deployment(settings, BagFacts.read(str(bag), VIEWS))
+    logs = tmp_path / 'logs'
+    with Hosts(VIEWS, multicast=False) as hosts:
+        procs = start(d, hosts, logs, discovery='peers', image_probes=[CUT])
+        fused = lambda: {line['stamp']: line for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
+                         if line['kind'] == 'fuse'}
+        _wait(lambda: _stamp(2) in fused(), 240, 'frame 2 fused (start-up and discovery)', procs)
+        # discovery went unicast: nobody listens on the multicast port of the domain, the ground on its unicast
+        ports = {h: hosts.udp_ports(h) for h in hosts.hosts}
+        hosts.cut(CUT)
+        cut_at = time.time()
+        time.sleep(5.0)   # what is tested: a 5 s outage
+        hosts.restore(CUT)
+        restored_at = time.time()
+        players = {label: p for label, p in procs.items() if label.endswith('bag_player')}
+        _wait(lambda: all(p.poll() is not None for p in players.values()), 120, 'the players to finish', procs)
+        _wait(lambda: _stamp(FRAMES - 1) in fused(), 30, 'the last frame fused', procs)
+        alive = {label: p.poll() for label, p in procs.items() if label not in players}
+        udp = {h: hosts.udp_errors(h) for h in hosts.hosts}
+        hosts.stop_all()
+        tag = hosts.tag
+    logs_text = {p.name: p.read_text() for p in logs.glob('*.log')}
+    print('UDP receive errors per host:', udp)
+    assert all(code is None for code in alive.values()), alive   # nothing crashed
+    assert all(p.returncode == 0 for p in players.values()), logs_text
+    assert not any('Traceback' in text for text in logs_text.values()), logs_text
+    assert namespaces(owner_pid=int(tag[3:])) == []
+
+    domain = int(os.environ.get('ROS_DOMAIN_ID', '0'))
+    assert not any(7400 + 250 * domain in p for p in ports.values()), ports   # RTPS well-known ports
+    assert 7400 + 250 * domain + 10 in ports['ground'], ports   # the unicast discovery of participant 0
+
+    lines = read_probe(logs / 'ground_probe.log')
+    tracks = [line['stamp'] for line in lines if line['kind'] == 'tracks']
+    status = {line['stamp']: line for line in lines if line['kind'] == 'fuse'}
+    published = {line['stamp']: line['t'] for line in read_probe(logs / f'{CUT}_probe.log') if line['kind'] == 'image'}
+    stamps = [_stamp(k) for k in range(FRAMES)]
+    assert sorted(tracks) == stamps and tracks == sorted(tracks), tracks   # every frame once, in order
+    views_used = [status[s]['views_used'] for s in stamps]
+    # the frames whose D5 image left during the cut were fused with D1 alone; the diagnostics say why
+    cut = [s for s in stamps if cut_at + 0.2 < published[s] < restored_at - 0.2]
+    assert len(cut) >= 3, (cut_at, restored_at, published)
+    for s in cut:   # (the frame before the restore may get its homography late, resent: 'no image')
+        assert status[s]['views_used'] == 1 and set(status[s]['missing']) == {CUT}, status[s]
+        assert status[s]['missing'][CUT].startswith('missing: no image'), status[s]
+    assert sum(status[s]['missing'][CUT] == 'missing: no image and no homography' for s in cut) >= 3
+    # what the reliable homography stream resent after the restore was of frames already fused: refused
+    assert 'D5: geometry at t=' in logs_text['fuse.log'] and 'arrived after its frame was fused; ignored' in \
+        logs_text['fuse.log'], logs_text['fuse.log']
+    # back within 2 frames of the link returning: the third frame published after it, and all later ones
+    after = [s for s in stamps if published[s] > restored_at]
+    assert len(after) >= 4, (restored_at, published)
+    assert all(status[s]['views_used'] == 2 for s in after[2:]), [(s, status[s]) for s in after]
+    assert all(status[s]['views_used'] == 2 for s in stamps if published[s] < cut_at - 0.5), views_used
+
+
+def test_throttled_link_and_fuse_restarted(matrix_sample, tmp_path):
+    frames, slow, rate_mbit = 45, 'D1', 4.0   # D1's images need 6 Mbit/s at 1 frame/s: it gets 4
+    # (45 frames: a restarted fuse process took up to 26 s to load on two loaded cores)
+    bag = write_replay_bag(matrix_sample, tmp_path / 'bag', VIEWS, back_and_forth(5, frames))
+    settings = GraphSettings(bag=str(bag), dataset=str(matrix_sample), views=VIEWS, lockstep=False, rate=RATE,
+                             sync_timeout=1.5)
+    d = deployment(settings, BagFacts.read(str(bag), VIEWS))
+    logs, other = tmp_path / 'logs', next(v for v in VIEWS if v != slow)
+    with Hosts(VIEWS) as hosts:
+        hosts.limit(slow, rate_mbit)
+        procs = start(d, hosts, logs, discovery='multicast', image_probes=[other])
+        fused = lambda: {line['stamp'] for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
+                         if line['kind'] == 'fuse'}
+        _wait(lambda: _stamp(3) in fused(), 240, 'frame 3 fused', procs)
+        first_fuse = procs.pop('fuse')
+        assert hosts.stop(first_fuse) == 0
+        stopped_at = time.time()
+        procs['fuse'] = restart(d, hosts, logs, 'fuse')
+        players = {label: p for label, p in procs.items() if label.endswith('bag_player')}
+        _wait(lambda: all(p.poll() is not None for p in players.values()), 120, 'the players to finish', procs)
+        _wait(lambda: _stamp(frames - 1) in fused(), 30, 'the last frame fused', procs)
+        link = hosts.link_bytes(slow)
+        alive = {label: p.poll() for label, p in procs.items() if label not in players}
+        hosts.stop_all()
+        tag = hosts.tag
+    logs_text = {p.name: p.read_text() for p in logs.glob('*.log')}
+    assert all(code is None for code in alive.values()), alive
+    assert all(p.returncode == 0 for p in players.values()), logs_text
+    assert not any('Traceback' in text for text in logs_text.values()), logs_text
+    assert namespaces(owner_pid=int(tag[3:])) == []
+
+    lines = read_probe(logs / 'ground_probe.log')
+    tracks = {line['stamp']: line for line in lines if line['kind'] == 'tracks'}
+    status = {line['stamp']: line for line in lines if line['kind'] == 'fuse'}
+    published = {line['stamp']: line['t'] for line in read_probe(logs / f'{other}_probe.log')
+                 if line['kind'] == 'image'}
+    # throttled: the link's queue dropped packets at the drone's end; frames without its image went out after
+    # the sync timeout with the other view, and the latency stayed bounded to the end (no growing queue)
+    assert link['dropped'] > 0, link
+    assert any(status[s]['missing'].get(slow, '').startswith('missing: no image') for s in status), status
+    # (D1's images would fall 1 frame behind every 3 in a queue without end: 15 s by the last frame. What
+    # latency there is, is fuse waiting sync_timeout for D1 plus the machine's load: 1.7-5.9 s seen on two
+    # cores shared with other work, the last frames' no higher than the first ones')
+    latency = [tracks[s]['t'] - published[s] for s in sorted(tracks) if s in published]
+    assert max(latency) < 10.0 and sorted(latency[-10:])[5] < settings.sync_timeout + 3.0, latency
+    # restarted: the first fuse process published the frames before it stopped, the second one resumes with
+    # the frames after it (its tracker fresh: ids from 1) and fuses both views when the link lets it
+    before = [s for s in tracks if tracks[s]['t'] < stopped_at]
+    after = sorted(s for s in tracks if tracks[s]['t'] > stopped_at)
+    assert len(before) >= 3 and 'published' in logs_text['fuse.log'], logs_text['fuse.log'][-2000:]
+    assert len(after) >= 4 and after[-1] == _stamp(frames - 1) and min(after) > max(before), (before, after)
+    resumed_ids = [i for s in after for i in tracks[s]['ids']]
+    assert resumed_ids and min(resumed_ids) == 1, [tracks[s]['ids'] for s in after]
+    # (its first frame may have no image: they left before its image subscriptions matched)
+    assert all(status[s]['views_used'] >= 1 for s in after[1:]), [status[s] for s in after]
