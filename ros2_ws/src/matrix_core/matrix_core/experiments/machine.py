@@ -27,6 +27,20 @@ def git_commit(repo: Path) -> str:
         return 'unknown'
 
 
+def code_commit(repo: Path = None) -> dict:
+    """``{'commit': full HEAD hash or None, 'dirty': bool}`` of the repository holding this code (or
+    ``repo``): recorded with every finished step, so a report can tell which steps predate the code."""
+    repo = Path(repo) if repo else Path(__file__).resolve().parents[5]
+    try:
+        head = subprocess.run(['git', '-C', str(repo), 'rev-parse', 'HEAD'], capture_output=True, text=True,
+                              check=True).stdout.strip()
+        dirty = subprocess.run(['git', '-C', str(repo), 'status', '--porcelain', '--untracked-files=no'],
+                               capture_output=True, text=True, check=True).stdout.strip()
+        return {'commit': head, 'dirty': bool(dirty)}
+    except (OSError, subprocess.CalledProcessError):
+        return {'commit': None, 'dirty': False}
+
+
 def machine_info(threads: int, repo: Path) -> dict:
     import os
 
