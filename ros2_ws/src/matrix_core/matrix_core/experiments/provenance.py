@@ -55,7 +55,8 @@ def stale_steps(repo, done: dict) -> dict:
         ancestor = is_ancestor(repo, last, commit)
         where = ', '.join(p.replace(CORE, '') for p in paths)
         if ancestor is None:
-            out[name] = f'made at {commit[:12]}, not in this repository\'s history ({where} last changed at {last[:12]})'
+            out[name] = (f'made at {commit[:12]}, not in this repository\'s history ({where} last changed at '
+                         f'{last[:12]})')
         elif not ancestor:
             out[name] = f'made at {commit[:12]}; {where} changed since (last at {last[:12]})'
         elif record.get('dirty'):

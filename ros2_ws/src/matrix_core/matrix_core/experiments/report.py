@@ -203,15 +203,16 @@ class Report:
 
     def transfer(self) -> None:
         shares = sorted(self.size.get('transfer_shares', [paper.TRANSFER_SHARE]))
-        rows, curves, measured = [], {'from scratch': {}, f'pretrained on complex (`{self.main}`)': {}}, {}
+        rows, curves, measured = [], {'from scratch': {}, 'pretrained on complex': {}}, {}
         for share in shares:
             pair = []
-            for kind, label in (('scratch', 'from scratch'), ('transfer', f'pretrained on complex (`{self.main}`)')):
+            for kind, label in (('scratch', 'from scratch'), ('transfer', 'pretrained on complex')):
                 r = one(self.records, model=transfer_name(kind, share), test='modified', calibration='ground_truth')
                 frames = r['trained']['frames'][1] + 1 if r else max(2, round(self.size['train_frames'] * share))
                 figures = paper.TRANSFER['scratch' if kind == 'scratch' else 'pretrained'] \
                     if abs(share - paper.TRANSFER_SHARE) < 1e-9 else {}
-                rows.append([f'{100 * share:g} %', frames, label] + [pct(value(r, k)) for k in SHORT] +
+                name = label + (f' (`{self.main}`)' if kind == 'transfer' else '')
+                rows.append([f'{100 * share:g} %', frames, name] + [pct(value(r, k)) for k in SHORT] +
                             [', '.join(f'{k} {f}' for k, f in figures.items())])
                 curves[label][share] = value(r, 'MODA')
                 pair.append(value(r, 'MODA'))

@@ -27,9 +27,10 @@ def transfer_discussion(measured: dict, paper_share: float, paper_scratch: float
     text = f'{head} Here pretraining changes MODA by {listed} (differences under {NOISE_POINTS:g} points are noise).'
     at_paper = gains.get(paper_share)
     if helps and at_paper is not None and at_paper >= NOISE_POINTS:
-        text += (f' The paper\'s effect appears at its share ({at_paper:+.1f} against {paper_gain:+.0f})'
-                 + (f' and at {", ".join(_share(s) for s in helps if s != paper_share)}' if len(helps) > 1 else '')
-                 + '.')
+        size = 'comparable in size' if at_paper >= paper_gain / 2 else 'but much smaller'
+        others = [_share(s) for s in helps if s != paper_share]
+        text += (f' The paper\'s effect appears at its share, {size} ({at_paper:+.1f} against {paper_gain:+.0f})'
+                 + (f', and at {", ".join(others)}' if others else '') + '.')
     elif helps:
         text += (f' The effect appears only with less data ({", ".join(_share(s) for s in helps)}): at '
                  f'{_share(paper_share)} the model trained from scratch already sees enough of the modified '
