@@ -76,3 +76,23 @@ def test_readers_step_on_the_real_multiviewx_sample(tmp_path, shared_dir, monkey
     monkeypatch.setenv('MATRIX_SHARED', str(tmp_path / 'missing'))
     with pytest.raises(StepUnavailable, match='MATRIX_SHARED'):
         EXECUTORS['readers']({'dataset': 'shared:multiviewx_sample'}, tmp_path / 'out2', tmp_path, False, print)
+
+
+def test_two_jobs_run_ready_steps_and_skip_those_after_a_missing_one(tmp_path, shared_dir, monkeypatch):
+    from matrix_core.experiments.plan import Step
+    from matrix_core.experiments.runner import run_plan
+    from matrix_core.experiments.sizes import QUICK
+
+    monkeypatch.setenv('MATRIX_SHARED', str(shared_dir))     # spawned workers inherit the environment
+    sample, missing = {'dataset': 'shared:multiviewx_sample'}, {'dataset': 'shared:no_such_folder'}
+    plan = [Step('tables/a', 'readers', sample), Step('tables/b', 'readers', missing),
+            Step('tables/c', 'readers', sample, ('tables/b',)), Step('tables/d', 'readers', sample, ('tables/a',))]
+    summary = run_plan(plan, QUICK, tmp_path / 'run', progress=False, repo=tmp_path, jobs=2)
+    states = {name: s['state'] for name, s in summary['steps'].items()}
+    assert list(states) == ['tables/a', 'tables/b', 'tables/c', 'tables/d']          # plan order kept
+    assert states == {'tables/a': 'done', 'tables/b': 'unavailable', 'tables/c': 'skipped', 'tables/d': 'done'}
+    assert 'needs tables/b, which was unavailable' in summary['steps']['tables/c']['reason']
+    done = json.loads((tmp_path / 'run' / 'steps' / 'tables' / 'a.done.json').read_text())
+    assert len(done['commit']) == 40 and done['kind'] == 'readers'                   # the code's commit
+    again = run_plan(plan, QUICK, tmp_path / 'run', progress=False, repo=tmp_path, jobs=2)
+    assert again['steps']['tables/a']['state'] == again['steps']['tables/d']['state'] == 'cached'
