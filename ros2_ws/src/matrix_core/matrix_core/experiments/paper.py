@@ -3,30 +3,34 @@ this project lists them from the paper. A :class:`Figure` keeps the paper's qual
 paper gives an approximate value (read off a figure or written "about"), ``>`` where it gives a bound.
 Statements without a figure are kept as text (``*_NOTE``)."""
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 SOURCE = 'MATRIX paper (figures as listed in issue #16 of this repository)'
 
 
 @dataclass(frozen=True)
 class Figure:
-    """One paper figure: ``value`` in percent; ``mark`` is '' (exact), '~' (approximate) or '>' (bound)."""
+    """One paper figure: ``value`` in percent; ``mark`` is '' (exact), '~' (approximate) or '>' (bound);
+    ``decimals``: as the paper prints it (95.0 stays 95.0; None: shortest form)."""
 
     value: float
     mark: str = ''
+    decimals: int = field(default=None, compare=False)
 
     def __post_init__(self):
         if self.mark not in ('', '~', '>'):
             raise ValueError(f'unknown mark {self.mark!r}')
 
     def __str__(self) -> str:
-        return f'{self.mark}{self.value:g}'
+        number = f'{self.value:g}' if self.decimals is None else f'{self.value:.{self.decimals}f}'
+        return f'{self.mark}{number}'
 
 
 def _f(text: str) -> Figure:
     """'~89' -> Figure(89, '~'); '>80' -> Figure(80, '>'); '5.72' -> Figure(5.72)."""
     mark = text[0] if text[0] in '~>' else ''
-    return Figure(float(text[len(mark):]), mark)
+    number = text[len(mark):]
+    return Figure(float(number), mark, len(number.split('.')[1]) if '.' in number else 0)
 
 
 def _row(text: str) -> dict:
