@@ -175,12 +175,17 @@ def test_report_flags_steps_older_than_the_code_they_depend_on(tmp_path):
     done = {'data/simple_train': {'kind': 'simulate', 'commit': first, 'dirty': False},
             'train/simple_s0': {'kind': 'train', 'commit': first, 'dirty': False},
             'geometry/complex_test_registration': {'kind': 'register', 'commit': first, 'dirty': False},
-            'eval/old': {'kind': 'evaluate'}}
+            'eval/old': {'kind': 'evaluate'},
+            'data/edited': {'kind': 'simulate', 'commit': first, 'dirty': True,
+                            'dirty_paths': ['ros2_ws/src/matrix_core/matrix_core/sim/a.py']},
+            'geometry/readme_edited': {'kind': 'register', 'commit': first, 'dirty': True, 'dirty_paths': ['README.md']}}
     write_run(tmp_path / 'run', QUICK, variant_rows(QUICK), {}, done=done)
     text = write_report(tmp_path / 'run', tmp_path / 'RESULTS.md', repo=repo).read_text()
     prov = section(text, '## Code and provenance')
     assert f'`{_git(repo, "rev-parse", "HEAD")[:12]}`' in prov and f'`{first[:12]}`' in prov
-    assert '**2 of 4 steps were made by an older commit than HEAD' in prov
+    assert '**3 of 6 steps were made by an older commit than HEAD (or with local changes)' in prov
+    assert '`data/edited`: made at' in prov and 'uncommitted local changes to sim' in prov
+    assert 'readme_edited' not in prov                        # local changes elsewhere do not matter
     assert '`train/simple_s0`: made at' in prov and 'bev changed since' in prov
     assert '`eval/old`: made by an unknown commit' in prov
     assert 'data/simple_train' not in prov and 'complex_test_registration' not in prov   # their code is unchanged

@@ -2,7 +2,8 @@
 
 Every finished step records the commit it ran at (``done.json``: ``commit``, ``dirty``). A step is
 *stale* when the last commit that touched the code it depends on (``git log -1 -- <paths>``) is not an
-ancestor of (or equal to) the step's commit: its numbers may no longer describe the code at HEAD.
+ancestor of (or equal to) the step's commit: its numbers may no longer describe the code at HEAD. A
+step that ran with uncommitted changes to that code (``dirty_paths``) is flagged too.
 """
 
 import subprocess
@@ -35,6 +36,13 @@ def is_ancestor(repo, older: str, newer: str) -> bool:
     return {0: True, 1: False}.get(r.returncode)
 
 
+def _touches(dirty_paths, paths) -> bool:
+    """Whether local changes (None: not recorded, assume yes) touch any of ``paths``."""
+    if dirty_paths is None:
+        return True
+    return any(d == p or d.startswith(p.rstrip('/') + '/') for d in dirty_paths for p in paths)
+
+
 def stale_steps(repo, done: dict) -> dict:
     """``{step name: reason}`` for the steps of ``done`` (name -> done.json record) whose code changed
     after the commit they ran at, or whose commit is unknown or had local changes."""
@@ -59,6 +67,6 @@ def stale_steps(repo, done: dict) -> dict:
                          f'{last[:12]})')
         elif not ancestor:
             out[name] = f'made at {commit[:12]}; {where} changed since (last at {last[:12]})'
-        elif record.get('dirty'):
-            out[name] = f'made at {commit[:12]} with uncommitted local changes'
+        elif record.get('dirty') and _touches(record.get('dirty_paths'), paths):
+            out[name] = f'made at {commit[:12]} with uncommitted local changes to {where}'
     return out

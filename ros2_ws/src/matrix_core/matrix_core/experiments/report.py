@@ -154,9 +154,9 @@ class Report:
                  f'{", ".join(f"`{c}`" for c in commits) or "none recorded"}.',
                  f'- Code at HEAD when this report was written: `{(head or "unknown")[:12]}`.']
         if stale:
-            lines.append(f'- **{len(stale)} of {len(done)} steps were made by an older commit than HEAD for the code '
-                         'they depend on** (sim, calib, register, bev, datasets); rerun them for current numbers '
-                         '(delete their `steps/<name>.done.json` in the run folder):')
+            lines.append(f'- **{len(stale)} of {len(done)} steps were made by an older commit than HEAD (or with local '
+                         'changes) for the code they depend on** (sim, calib, register, bev, datasets); rerun them '
+                         'for current numbers (delete their `steps/<name>.done.json` in the run folder):')
             lines += [f'  - `{name}`: {reason}' for name, reason in stale.items()]
         else:
             lines.append(f'- All {len(done)} steps are current: none depends on code (sim, calib, register, bev, '
