@@ -5,7 +5,7 @@ IN_ENV := source scripts/env.sh &&
 # Where the experiments write their report (its PNGs go to images/results/ beside it); CI writes elsewhere.
 RESULTS ?= docs/RESULTS.md
 
-.PHONY: help setup build data test test-fast demo bench clean experiments experiments-quick
+.PHONY: help setup build data test test-fast demo bench clean experiments experiments-quick experiments-standard
 
 help:
 	@echo "make setup  - create .venv (pinned), colcon build ros2_ws, install offline weights (idempotent)"
@@ -16,6 +16,7 @@ help:
 	@echo "make bench  - print the speed figures of every component (scripts/bench_*.py but the soak)"
 	@echo "make build  - colcon build only"
 	@echo "make experiments       - the paper's experiments at full size (hours) -> \$$RESULTS (docs/RESULTS.md) + PNGs"
+	@echo "make experiments-standard - the size of docs/RESULTS.md (about 2.5 h, two steps at once) -> \$$RESULTS + docs/results/standard/"
 	@echo "make experiments-quick - the same as a smoke test (a few minutes; numbers meaningless), e.g. RESULTS=out/quick/RESULTS.md"
 
 setup:
@@ -48,6 +49,9 @@ bench: setup
 
 experiments: setup
 	$(IN_ENV) matrix-tracker experiments --mode full --out out/experiments --report $(RESULTS)
+
+experiments-standard: setup
+	$(IN_ENV) matrix-tracker experiments --mode standard --jobs 2 --out out/experiments --report $(RESULTS)
 
 experiments-quick: setup
 	$(IN_ENV) matrix-tracker experiments --mode quick --out out/experiments --report $(RESULTS)

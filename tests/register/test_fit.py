@@ -23,9 +23,10 @@ def test_recovers_a_known_homography_with_outliers():
 
 def test_collinear_points_are_degenerate():
     src = np.c_[np.linspace(0, 100, 30), np.linspace(0, 50, 30)]
-    fit = fit_homography(src, src * 2.0 + 1.0)
-    assert fit.H is None and fit.reason
-    assert not fit.inliers.any()
+    for method in ('magsac', 'ransac'):
+        fit = fit_homography(src, src * 2.0 + 1.0, method)
+        assert fit.H is None and fit.reason
+        assert not fit.inliers.any()
 
 
 def test_nan_coordinates_and_too_few_points_fail():
@@ -44,3 +45,48 @@ def test_nan_coordinates_and_too_few_points_fail():
 def test_invalid_homographies_are_named(H, words):
     assert words in is_valid_homography(H)
     assert is_valid_homography(np.eye(3)) == ''
+
+
+@pytest.fixture(scope='module')
+def real_matches(matrix_sample):
+    """SIFT matches of drone D1's frame 0 to its reference image in the real MATRIX sample: (src, dst)
+    full-resolution pixels, as the registrar fits them (ground mask off: more outliers, a harder fit)."""
+    import cv2
+
+    from matrix_core.register.backend_sift import SiftBackend
+    from matrix_core.register.matching import match_symmetric
+
+    backend = SiftBackend(scale=0.25, contrast_threshold=0.005)
+    cur = backend.extract(cv2.imread(str(matrix_sample / 'image_subsets/D1/0000.jpg')), 4000)
+    ref_dir = matrix_sample / 'reference/image_subsets/D1'
+    ref = backend.extract(cv2.imread(str(sorted(ref_dir.iterdir())[0])), 8000)
+    pairs = match_symmetric(cur.desc, ref.desc, 0.8)
+    assert len(pairs) > 100
+    return cur.xy[pairs[:, 0]], ref.xy[pairs[:, 1]]
+
+
+def test_plain_ransac_is_seeded_on_a_real_image_pair(real_matches):
+    src, dst = real_matches
+    fits = [fit_homography(src, dst, 'ransac', 3.0, seed=seed) for seed in range(10)]
+    assert all(f.reason == '' for f in fits)
+    again = fit_homography(src, dst, 'ransac', 3.0, seed=3)
+    np.testing.assert_array_equal(again.H, fits[3].H)               # same seed, same H
+    np.testing.assert_array_equal(again.inliers, fits[3].inliers)
+    distinct = {f.H.tobytes() for f in fits}
+    assert len(distinct) >= 5, f'only {len(distinct)} different homographies from 10 seeds'
+    # Different samples, one scene: the homographies agree on where the image centre goes (a few pixels).
+    centre = np.array([[[960.0, 540.0]]])
+    import cv2
+    mapped = np.array([cv2.perspectiveTransform(centre, f.H).ravel() for f in fits])
+    assert np.ptp(mapped, axis=0).max() < 30.0
+
+
+def test_magsac_is_deterministic_whatever_the_seed(real_matches):
+    src, dst = real_matches
+    a, b = fit_homography(src, dst, 'magsac', 3.0, seed=0), fit_homography(src, dst, 'magsac', 3.0, seed=7)
+    assert a.reason == '' and np.array_equal(a.H, b.H)
+
+
+def test_unknown_estimator_is_an_error():
+    with pytest.raises(ValueError, match='estimator'):
+        fit_homography(np.zeros((5, 2)), np.zeros((5, 2)), 'lmeds')

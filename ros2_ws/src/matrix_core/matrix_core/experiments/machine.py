@@ -27,6 +27,22 @@ def git_commit(repo: Path) -> str:
         return 'unknown'
 
 
+def code_commit(repo: Path = None) -> dict:
+    """``{'commit': full HEAD hash or None, 'dirty': bool, 'dirty_paths': [changed tracked files]}`` of the
+    repository holding this code (or ``repo``): recorded with every finished step, so a report can tell
+    which steps predate the code, or ran with local changes to the code they depend on."""
+    repo = Path(repo) if repo else Path(__file__).resolve().parents[5]
+    try:
+        head = subprocess.run(['git', '-C', str(repo), 'rev-parse', 'HEAD'], capture_output=True, text=True,
+                              check=True).stdout.strip()
+        status = subprocess.run(['git', '-C', str(repo), 'status', '--porcelain', '--untracked-files=no'],
+                                capture_output=True, text=True, check=True).stdout.splitlines()
+        paths = [line[3:].split(' -> ')[-1] for line in status if line.strip()]
+        return {'commit': head, 'dirty': bool(paths), 'dirty_paths': paths[:200]}
+    except (OSError, subprocess.CalledProcessError):
+        return {'commit': None, 'dirty': False, 'dirty_paths': []}
+
+
 def machine_info(threads: int, repo: Path) -> dict:
     import os
 

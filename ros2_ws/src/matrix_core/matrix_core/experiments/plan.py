@@ -1,17 +1,22 @@
-"""The five experiments of issue 8 as a list of cached steps (simulate, calibrate, register, train,
-evaluate). A step is pure data: its folder name, what it runs and every parameter its output depends on.
+"""The paper's experiments (issues 8 and 16) as a list of cached steps (simulate, calibrate, register,
+train, evaluate, readers). A step is pure data: its folder name, what it runs and every parameter its
+output depends on.
 
-Experiments (all on simulated MATRIX variants; models are named ``<trained on>_<what>``):
-    1. simple vs complex: ``simple_s0`` and ``complex_s0`` on held-out test sequences of their variant.
-    2. static baselines and ablations on the complex test sequence with ``complex_s0``: calibration
-       sources ground_truth (ours), pnp / pnp_stale (registration off), registration (calibration off), frozen_first
-       and reference (both off: the static-camera assumption), plus ``complex_static``, a model trained and
-       tested with the frozen first-frame calibration (the EarlyBird/TrackTacular setting).
-    3. transfer: the modified variant with ``transfer_fraction`` of its training frames, from scratch
-       (``modified_scratch``) vs initialised with ``complex_s0`` (``modified_transfer``); ``complex_s0``
-       without fine-tuning for reference.
-    4. camera dropout: ``simple_s0`` and ``complex_s0`` with random view subsets per rate and seed.
-    5. run-to-run variation: ``complex_s<seed>`` for every training seed.
+Experiments (simulated MATRIX variants; models are named ``<trained on>_<what>``):
+    1. simple and complex, the live pipeline: ``simple_s0`` / ``complex_s0`` on held-out test sequences of
+       their variant with each geometry source: ``registration`` (``matrix-tracker register``, as the live
+       graph computes it: the headline "ours" row), ``pnp`` / ``pnp_stale`` (per-frame calibration route),
+       ``ground_truth`` (the simulator's calibration: "oracle geometry"), ``frozen_first`` and
+       ``reference`` (static camera), plus ``<variant>_static``, trained and tested with the frozen
+       first-frame calibration (the EarlyBird/TrackTacular setting). Both variants.
+    2. transfer sweep: the modified variant with each share of its training frames, from scratch
+       (``modified_scratch_p<percent>``) vs initialised with ``complex_s0`` (``modified_transfer_p<percent>``);
+       ``complex_s0`` without fine-tuning for reference (oracle geometry: the detector is the subject).
+    3. camera dropout: ``simple_s0`` and ``complex_s0`` with random view subsets per rate and seed (oracle geometry).
+    4. run-to-run variation as the paper measures it: ``complex_s0`` with the homographies of one
+       plain-RANSAC registration run per RANSAC seed; and ``complex_s<seed>`` per training seed
+       (registration homographies) as a second table.
+    5. Table III: the dataset readers on the real MultiviewX sample (``../shared/multiviewx_sample``).
 """
 
 from dataclasses import dataclass, field
@@ -23,12 +28,16 @@ VARIANTS = ('simple', 'complex', 'modified')
 # Simulator seeds of the training and held-out test sequences (never equal).
 SIM_SEEDS = {'simple': (101, 201), 'complex': (102, 202), 'modified': (103, 203)}
 VIEWS = ('D1', 'D2', 'D3', 'D4', 'D5', 'D6', 'D7', 'D8')   # the simulator's eight drones
-# Steps that estimate the geometry of a test sequence (name -> kind), and the calibration sources that
-# read their output folder (source -> step name).
+# Test variants whose geometry is estimated (registration, PnP), and the steps that do it (name -> kind).
+GEOMETRY_VARIANTS = ('simple', 'complex')
 GEOMETRY_STEPS = {'pnp': 'calibrate', 'registration': 'register'}
+# Calibration sources that read a geometry step's output folder (source -> step name suffix).
 SOURCE_DIRS = {'pnp': 'pnp', 'pnp_stale': 'pnp', 'registration': 'registration'}
-ABLATION_SOURCES = ('ground_truth', 'pnp', 'pnp_stale', 'registration', 'frozen_first', 'reference')
-
+# Every geometry source of experiment 1, the headline (live pipeline) first.
+ABLATION_SOURCES = ('registration', 'pnp', 'pnp_stale', 'ground_truth', 'frozen_first', 'reference')
+HEADLINE_SOURCE = 'registration'
+ORACLE_SOURCE = 'ground_truth'
+MULTIVIEWX_STEP = 'tables/multiviewx_sample'
 
 @dataclass(frozen=True)
 class Step:
@@ -61,20 +70,48 @@ def train_step(name: str, variant: str, size: ExperimentSize, seed: int = 0, cal
     params = {'variant': variant, 'dataset': data, 'frames': [0, (frames or size.train_frames) - 1],
               'calibration': calibration, 'bev': bev, 'epochs': size.epochs, 'lr': size.lr,
               'lr_schedule': size.lr_schedule, 'batch_size': size.batch_size, 'seed': seed,
-              'max_steps_per_epoch': size.max_steps_per_epoch, 'init': f'train/{init}' if init else None}
+              'max_steps_per_epoch': size.max_steps_per_epoch, 'augment': size.augment,
+              'init': f'train/{init}' if init else None}
     return Step(f'train/{name}', 'train', params, (data,) + ((f'train/{init}',) if init else ()))
 
 
-def eval_step(model: str, variant: str, calibration: str = 'ground_truth', subset=None, plot: bool = False) -> Step:
+def geometry_dir(variant: str, source: str, ransac_seed: int = None) -> str:
+    """Folder of the geometry step a calibration source reads (``ransac_seed``: one plain-RANSAC run)."""
+    suffix = f'_ransac_s{ransac_seed}' if ransac_seed is not None else ''
+    return f'geometry/{variant}_test_{SOURCE_DIRS[source]}{suffix}'
+
+
+def geometry_step(variant: str, kind: str, size: ExperimentSize, ransac_seed: int = None) -> Step:
+    """PnP calibration (``calibrate``) or registration (``register``; MAGSAC, the live default, or plain
+    RANSAC with ``ransac_seed``) of a variant's test sequence."""
+    params = {'dataset': f'data/{variant}_test', 'variant': variant, 'image_size': sim_size(size)}
+    source = 'pnp' if kind == 'calibrate' else 'registration'
+    if kind == 'register':
+        params.update(estimator='magsac' if ransac_seed is None else 'ransac',
+                      seed=0 if ransac_seed is None else int(ransac_seed))
+    return Step(geometry_dir(variant, source, ransac_seed), kind, params, (f'data/{variant}_test',))
+
+
+def transfer_name(kind: str, share: float) -> str:
+    """``modified_scratch_p50`` / ``modified_transfer_p5`` (kind: scratch or transfer; share in (0, 1])."""
+    return f'modified_{kind}_p{100 * share:g}'
+
+
+def eval_step(model: str, variant: str, calibration: str = 'ground_truth', subset=None, plot: bool = False,
+              ransac_seed: int = None) -> Step:
     data = f'data/{variant}_test'
     name = f'eval/{model}__{variant}__{calibration}'
     needs = [data, f'train/{model}']
     params = {'model': model, 'test': variant, 'dataset': data, 'checkpoint': f'train/{model}/last.pt',
-              'calibration': calibration, 'calibration_dir': None, 'views': None, 'dropped': [],
-              'drop_rate': 0.0, 'drop_seed': -1, 'plot': plot}
+              'calibration': calibration, 'calibration_dir': None, 'ransac_seed': ransac_seed, 'views': None,
+              'dropped': [], 'drop_rate': 0.0, 'drop_seed': -1, 'plot': plot}
+    if ransac_seed is not None and calibration != 'registration':
+        raise ValueError('a RANSAC seed only applies to the registration source')
     if calibration in SOURCE_DIRS:
-        params['calibration_dir'] = f'geometry/{variant}_test_{SOURCE_DIRS[calibration]}'
+        params['calibration_dir'] = geometry_dir(variant, calibration, ransac_seed)
         needs.append(params['calibration_dir'])
+    if ransac_seed is not None:
+        name += f'__ransac_s{ransac_seed}'
     if subset is not None and subset.dropped:
         name += f'__drop{subset.rate:g}_s{subset.seed}'
         params.update(views=list(subset.kept), dropped=list(subset.dropped), drop_rate=subset.rate,
@@ -83,28 +120,37 @@ def eval_step(model: str, variant: str, calibration: str = 'ground_truth', subse
 
 
 def build_plan(size: ExperimentSize) -> list:
-    """Every step of the five experiments, each after the steps it needs, without duplicates."""
+    """Every step of the experiments, each after the steps it needs, without duplicates."""
     steps = [data_step(v, role, size) for v in VARIANTS for role in ('train', 'test')]
-    for source, kind in GEOMETRY_STEPS.items():
-        steps.append(Step(f'geometry/complex_test_{source}', kind,
-                          {'dataset': 'data/complex_test', 'variant': 'complex', 'image_size': sim_size(size)},
-                          ('data/complex_test',)))
-    steps.append(train_step('simple_s0', 'simple', size, seed=size.seeds[0]))
+    for variant in GEOMETRY_VARIANTS:
+        steps += [geometry_step(variant, kind, size) for kind in GEOMETRY_STEPS.values()]
+    steps += [geometry_step('complex', 'register', size, ransac_seed=k) for k in size.ransac_seeds]
+    steps.append(Step(MULTIVIEWX_STEP, 'readers', {'dataset': 'shared:multiviewx_sample'}))
+    first = size.seeds[0]
+    main = f'complex_s{first}'
+    steps.append(train_step('simple_s0', 'simple', size, seed=first))
     steps += [train_step(f'complex_s{s}', 'complex', size, seed=s) for s in size.seeds]
-    main = f'complex_s{size.seeds[0]}'
-    steps.append(train_step('complex_static', 'complex', size, seed=size.seeds[0], calibration='frozen_first'))
-    steps.append(train_step('modified_scratch', 'modified', size, seed=size.seeds[0], frames=size.transfer_frames))
-    steps.append(train_step('modified_transfer', 'modified', size, seed=size.seeds[0], frames=size.transfer_frames,
-                            init=main))
-    # 1 and 5: every model of its own variant with the ground-truth per-frame calibration.
-    steps.append(eval_step('simple_s0', 'simple', plot=True))
-    steps += [eval_step(f'complex_s{s}', 'complex', plot=s == size.seeds[0]) for s in size.seeds]
-    # 2: ablations and static baselines.
-    steps += [eval_step(main, 'complex', source) for source in ABLATION_SOURCES if source != 'ground_truth']
-    steps.append(eval_step('complex_static', 'complex', 'frozen_first'))
-    # 3: transfer.
-    steps += [eval_step(m, 'modified') for m in ('modified_scratch', 'modified_transfer', main)]
-    # 4: dropout (rate 0 is the plain evaluation above).
+    for variant in GEOMETRY_VARIANTS:
+        steps.append(train_step(f'{variant}_static', variant, size, seed=first, calibration='frozen_first'))
+    # Smallest shares first: a partial run still shows the low-data regime, where pretraining matters most.
+    for share in sorted(size.transfer_shares):
+        frames = size.frames_of_share(share)
+        steps.append(train_step(transfer_name('scratch', share), 'modified', size, seed=first, frames=frames))
+        steps.append(train_step(transfer_name('transfer', share), 'modified', size, seed=first, frames=frames,
+                                init=main))
+    # 1: every geometry source on both variants, the static-trained models with their frozen calibration.
+    for variant, model in (('simple', 'simple_s0'), ('complex', main)):
+        steps += [eval_step(model, variant, source, plot=source in (HEADLINE_SOURCE, ORACLE_SOURCE))
+                  for source in ABLATION_SOURCES]
+        steps.append(eval_step(f'{variant}_static', variant, 'frozen_first'))
+    # 4: RANSAC seeds of the registration with the main model; training seeds with the live geometry.
+    steps += [eval_step(main, 'complex', 'registration', ransac_seed=k) for k in size.ransac_seeds]
+    steps += [eval_step(f'complex_s{s}', 'complex', HEADLINE_SOURCE) for s in size.seeds]
+    # 2: transfer sweep.
+    steps += [eval_step(transfer_name(kind, share), 'modified') for share in sorted(size.transfer_shares)
+              for kind in ('scratch', 'transfer')]
+    steps.append(eval_step(main, 'modified'))
+    # 3: dropout (rate 0 is the plain oracle evaluation above).
     for model, variant in (('simple_s0', 'simple'), (main, 'complex')):
         for rate in size.dropout_rates:
             steps += [eval_step(model, variant, subset=s) for s in dropout_subsets(VIEWS, rate, size.dropout_seeds)

@@ -44,26 +44,69 @@ def bar_chart(path, metrics: list, series: dict, title: str, paper: dict = None)
     return _save(plt, fig, path)
 
 
-def dropout_curves(path, curves: dict, metrics=('MODA', 'MODP', 'MOTA', 'MOTP'), paper_points: dict = None) -> Path:
+def _paper_marker(ax, x: float, figure, color, label: str = None) -> None:
+    """A paper figure as a star (approximate '~' or exact) or a triangle pointing up (a '>' bound)."""
+    ax.plot([x], [figure.value], marker='^' if figure.mark == '>' else '*', markersize=11, linestyle='none',
+            color=color, markeredgecolor='black', alpha=0.75, label=label)
+    ax.annotate(str(figure), (x, figure.value), textcoords='offset points', xytext=(6, 2), fontsize=7)
+
+
+def dropout_curves(path, curves: dict, metrics=('MODA', 'MODP', 'MOTA', 'MOTP'), paper_points: dict = None,
+                   bands: dict = None) -> Path:
     """One panel per metric: value vs drop rate with +-1 std bars. ``curves``: label -> {rate: {metric:
-    (mean, std)}}; ``paper_points``: metric -> [(rate, value, label)] drawn as markers."""
+    (mean, std)}}; ``paper_points``: (label, metric) -> {rate: paper.Figure}, drawn as markers in the
+    colour of that label's curve; ``bands``: metric -> (low, high), a range the paper states (shaded)."""
     plt = _plt()
     fig, axes = plt.subplots(2, 2, figsize=(9, 7), dpi=110)
     for ax, metric in zip(axes.ravel(), metrics):
+        colors = {}
         for label, by_rate in curves.items():
             rates = sorted(by_rate)
             mean = [by_rate[r][metric][0] for r in rates]
             std = [0.0 if math.isnan(by_rate[r][metric][1]) else by_rate[r][metric][1] for r in rates]
-            ax.errorbar(rates, mean, yerr=std, marker='o', capsize=3, label=label)
-        for rate, v, label in (paper_points or {}).get(metric, []):
-            ax.plot([rate], [v], marker='*', markersize=11, linestyle='none', color='black', alpha=0.6)
-            ax.annotate(label, (rate, v), textcoords='offset points', xytext=(5, 3), fontsize=7)
+            line = ax.errorbar(rates, mean, yerr=std, marker='o', capsize=3, label=label)
+            colors[label] = line[0].get_color()
+        for (label, m), points in (paper_points or {}).items():
+            if m == metric:
+                for i, (rate, figure) in enumerate(sorted(points.items())):
+                    _paper_marker(ax, rate, figure, colors.get(label, 'black'),
+                                  f'paper, {label}' if i == 0 else None)
+        if metric in (bands or {}):
+            low, high = bands[metric]
+            ax.axhspan(low, high, color='grey', alpha=0.15, label=f'paper: {low:g}-{high:g}')
         ax.set_title(metric)
         ax.set_xlabel('share of views dropped')
         ax.set_ylabel('%')
         ax.grid(alpha=0.3)
-    axes[0, 0].legend(fontsize=8)
-    fig.suptitle('Camera dropout at test time (mean +- std over random view subsets; stars: paper)')
+        ax.legend(fontsize=7)
+    fig.suptitle('Camera dropout at test time (mean +- std over random view subsets; markers: paper)')
+    return _save(plt, fig, path)
+
+
+def share_curves(path, curves: dict, paper_points: dict = None, metric: str = 'MODA') -> Path:
+    """``metric`` against the share of training data: ``curves``: label -> {share: value in percent}
+    (nan = not measured); ``paper_points``: label -> {share: paper.Figure}, drawn in that curve's colour."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.5, 4.5), dpi=110)
+    colors = {}
+    for label, by_share in curves.items():
+        shares = sorted(by_share)
+        line, = ax.plot([100 * x for x in shares], [by_share[x] for x in shares], marker='o', label=label)
+        colors[label] = line.get_color()
+    for label, points in (paper_points or {}).items():
+        for i, (share, figure) in enumerate(sorted(points.items())):
+            _paper_marker(ax, 100 * share, figure, colors.get(label, 'black'), f'paper, {label}' if i == 0 else None)
+    ax.set_xscale('log')
+    ax.set_xticks([100 * x for x in sorted({x for c in curves.values() for x in c})] or [50])
+    from matplotlib.ticker import FormatStrFormatter, NullFormatter
+
+    ax.xaxis.set_major_formatter(FormatStrFormatter('%g'))
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel('share of the modified variant\'s training frames (%)')
+    ax.set_ylabel(f'{metric} (%)')
+    ax.set_title(f'Transfer: {metric} vs training share, from scratch vs pretrained on complex')
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
     return _save(plt, fig, path)
 
 

@@ -26,6 +26,19 @@ def load_records(run_dir) -> list:
     return [json.loads(p.read_text()) for p in sorted(Path(run_dir).glob('eval/*/metrics.json'))]
 
 
+def load_table(run_dir, name: str):
+    """The ``metrics.json`` of a non-evaluation step (e.g. ``tables/multiviewx_sample``), or None."""
+    path = Path(run_dir) / name / 'metrics.json'
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
+def load_done(run_dir) -> dict:
+    """Every ``steps/<name>.done.json`` of a run: step name -> record (kind, params, wall_s, commit)."""
+    steps = Path(run_dir) / 'steps'
+    return {str(p.relative_to(steps))[:-len('.done.json')]: json.loads(p.read_text())
+            for p in sorted(steps.glob('**/*.done.json'))}
+
+
 def load_run(run_dir) -> dict:
     path = Path(run_dir) / 'run.json'
     if not path.is_file():
@@ -39,8 +52,9 @@ def select(records: list, **criteria) -> list:
 
 
 def one(records: list, **criteria):
-    """The single full-view record matching ``criteria``, or None."""
-    found = select(records, **{'dropped': [], **criteria})
+    """The single full-view record matching ``criteria`` (by default not a plain-RANSAC registration run
+    of the run-to-run experiment: ``ransac_seed=None``), or None."""
+    found = select(records, **{'dropped': [], 'ransac_seed': None, **criteria})
     return found[0] if found else None
 
 

@@ -4,19 +4,22 @@ A step writes into ``<run>/<name>/``; its params go to ``<run>/steps/<name>.star
 ``.done.json`` (with the wall time) after. A step started with other params, or unfinished, is redone
 from an empty folder - except an unfinished training, which resumes from its ``last.pt``. A step that
 fails is logged (``<name>.error.txt``) and the steps that need it are skipped; the run goes on, and
-``run.json`` lists every step's state for the report.
+``run.json`` lists every step's state for the report. With ``jobs`` > 1, steps whose needs are finished
+run at once in that many worker processes (one torch thread each, in plan order).
 """
 
 import dataclasses
 import json
+import multiprocessing
 import shutil
 import time
 import traceback
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 
 import torch
 
-from matrix_core.experiments.machine import machine_info
+from matrix_core.experiments.machine import code_commit, machine_info
 from matrix_core.experiments.steps import EXECUTORS, StepUnavailable
 
 DONE, CACHED, UNAVAILABLE, FAILED, SKIPPED = 'done', 'cached', 'unavailable', 'failed', 'skipped'
@@ -69,12 +72,64 @@ def run_step(step, run_dir: Path, progress: bool, log) -> dict:
         return {'state': FAILED, 'reason': f'{type(exc).__name__}: {exc}'.splitlines()[0][:300]}
     wall = time.perf_counter() - start
     record_path(run_dir, step.name, 'done.json').write_text(json.dumps(
-        {'name': step.name, 'kind': step.kind, 'params': step.params, 'wall_s': wall}, indent=2))
+        {'name': step.name, 'kind': step.kind, 'params': step.params, 'wall_s': wall, **code_commit(),
+         'finished_utc': time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime())}, indent=2))
     return {'state': DONE, 'wall_s': wall}
 
 
-def run_plan(plan: list, size, run_dir, threads: int = 1, progress: bool = True, log=print, repo=None) -> dict:
-    """Run every step of ``plan`` (in order) under ``run_dir``; returns and writes ``run.json``."""
+def _blocked(step, states: dict, planned: set):
+    """(name, state) of the first need that ended without a result, 'wait' when a need is still to come,
+    or None when the step can run."""
+    for n in step.needs:
+        state = states.get(n, {}).get('state')
+        if state in (DONE, CACHED):
+            continue
+        if state is None and n in planned:
+            return n, 'wait'
+        return n, state or 'not planned'
+    return None
+
+
+def _in_worker(step, run_dir: Path, threads: int) -> dict:
+    """One step in a worker process (progress bars off: several would interleave)."""
+    torch.set_num_threads(threads)
+    return run_step(step, run_dir, False, print)
+
+
+def _run_parallel(plan: list, run_dir: Path, threads: int, jobs: int, bar, states: dict) -> None:
+    """Run ``plan`` with ``jobs`` steps at once (spawned workers: no forked torch state), in plan order."""
+    planned, pending, running = {s.name for s in plan}, list(plan), {}
+    with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context('spawn')) as pool:
+        while pending or running:
+            for step in list(pending):
+                if len(running) >= jobs:
+                    break
+                blocked = _blocked(step, states, planned)
+                if blocked and blocked[1] == 'wait':
+                    continue
+                pending.remove(step)
+                if blocked:
+                    states[step.name] = {'state': SKIPPED, 'reason': f'needs {blocked[0]}, which was {blocked[1]}'}
+                    bar.update()
+                    continue
+                running[pool.submit(_in_worker, step, run_dir, threads)] = step
+            if not running:
+                continue
+            finished, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in finished:
+                step = running.pop(future)
+                try:
+                    result = future.result()
+                except Exception as exc:  # a worker that died (e.g. out of memory)
+                    result = {'state': FAILED, 'reason': f'worker died: {type(exc).__name__}: {exc}'[:300]}
+                states[step.name] = {'kind': step.kind, **result}
+                bar.set_postfix_str(step.name)
+                bar.update()
+
+
+def run_plan(plan: list, size, run_dir, threads: int = 1, progress: bool = True, log=print, repo=None,
+             jobs: int = 1) -> dict:
+    """Run every step of ``plan`` (in order; ``jobs`` at once) under ``run_dir``; returns and writes ``run.json``."""
     from tqdm import tqdm
 
     run_dir = Path(run_dir)
@@ -82,17 +137,25 @@ def run_plan(plan: list, size, run_dir, threads: int = 1, progress: bool = True,
     torch.set_num_threads(threads)
     started = time.time()
     states = {}
-    bar = tqdm(plan, desc=f'experiments ({size.name})', unit='step', disable=not progress)
-    for step in bar:
-        bar.set_postfix_str(step.name)
-        blocked = [n for n in step.needs if states.get(n, {}).get('state') not in (DONE, CACHED)]
-        if blocked:
-            was = states.get(blocked[0], {}).get('state', 'not planned')
-            states[step.name] = {'state': SKIPPED, 'reason': f'needs {blocked[0]}, which was {was}'}
-            continue
-        states[step.name] = {'kind': step.kind, **run_step(step, run_dir, progress, log)}
-    summary = {'size': {**dataclasses.asdict(size), 'transfer_frames': size.transfer_frames},
-               'machine': machine_info(threads, Path(repo or Path.cwd())),
+    if jobs > 1:
+        with tqdm(total=len(plan), desc=f'experiments ({size.name}, {jobs} jobs)', unit='step',
+                  disable=not progress) as bar:
+            _run_parallel(plan, run_dir, threads, jobs, bar, states)
+        states = {s.name: states[s.name] for s in plan}
+    else:
+        bar = tqdm(plan, desc=f'experiments ({size.name})', unit='step', disable=not progress)
+        planned = {s.name for s in plan}
+        for step in bar:
+            bar.set_postfix_str(step.name)
+            blocked = _blocked(step, states, planned)
+            if blocked:
+                states[step.name] = {'state': SKIPPED, 'reason': f'needs {blocked[0]}, which was '
+                                     f'{"not run" if blocked[1] == "wait" else blocked[1]}'}
+                continue
+            states[step.name] = {'kind': step.kind, **run_step(step, run_dir, progress, log)}
+    summary = {'size': {**dataclasses.asdict(size), 'transfer_fraction': size.transfer_fraction,
+                        'transfer_frames': size.transfer_frames},
+               'machine': {**machine_info(threads, Path(repo or Path.cwd())), 'jobs': jobs},
                'started_utc': time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime(started)),
                'wall_s': time.time() - started, 'steps': states}
     (run_dir / RUN_FILE).write_text(json.dumps(summary, indent=2))
@@ -100,12 +163,15 @@ def run_plan(plan: list, size, run_dir, threads: int = 1, progress: bool = True,
 
 
 def run_experiments(size, out_dir, report, images=None, threads: int = 1, progress: bool = True, log=print,
-                    repo=None) -> tuple:
-    """The whole thing: plan of ``size`` run in ``out_dir/<size.name>``, then the report. Returns
-    (run summary, report path)."""
+                    repo=None, jobs: int = None, metrics_dir=None) -> tuple:
+    """The whole thing: plan of ``size`` run in ``out_dir/<size.name>`` (``jobs`` steps at once, default the
+    size's), its small files archived to ``metrics_dir`` (default ``<report folder>/results/<size>``),
+    then the report from that archive. Returns (run summary, report path)."""
+    from matrix_core.experiments.archive import archive_run, default_metrics_dir
     from matrix_core.experiments.plan import build_plan
     from matrix_core.experiments.report import write_report
 
     run_dir = Path(out_dir) / size.name
-    summary = run_plan(build_plan(size), size, run_dir, threads, progress, log, repo)
-    return summary, write_report(run_dir, report, images)
+    summary = run_plan(build_plan(size), size, run_dir, threads, progress, log, repo, jobs or size.jobs)
+    archive = archive_run(run_dir, metrics_dir or default_metrics_dir(report, size.name))
+    return summary, write_report(archive, report, images, repo=repo)

@@ -64,8 +64,10 @@ def run_calibrate(p: dict, out: Path, run_dir: Path, progress: bool, log) -> Non
 
 def run_register(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
     # The registration defaults are tuned on 1920x1080 (scale 0.25 = 480x270): keep that working size.
+    # estimator/seed: magsac (the live default) or one seeded plain-RANSAC run (run-to-run variation).
     scale = min(1.0, 0.25 * 1920 / p['image_size'][0])
-    _cli(['register', str(run_dir / p['dataset']), '--out', str(out), '--scale', f'{scale:g}'], out, 'register.log')
+    _cli(['register', str(run_dir / p['dataset']), '--out', str(out), '--scale', f'{scale:g}',
+          '--estimator', p.get('estimator', 'magsac'), '--seed', str(p.get('seed', 0))], out, 'register.log')
 
 
 def _sequence_spec(p: dict, run_dir: Path):
@@ -96,6 +98,7 @@ def initialise_from(init_checkpoint: Path, config, out: Path) -> None:
 
 
 def run_train(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
+    from matrix_core.bev.augment import AugmentConfig
     from matrix_core.bev.config import TrainConfig
     from matrix_core.bev.settings import BevSettings
     from matrix_core.bev.training import train
@@ -103,7 +106,7 @@ def run_train(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
     config = TrainConfig(train=[_sequence_spec(p, run_dir)], bev=BevSettings(**p['bev']), epochs=p['epochs'],
                          lr=p['lr'], lr_schedule=p['lr_schedule'], batch_size=p['batch_size'], seed=p['seed'],
                          max_steps_per_epoch=p['max_steps_per_epoch'], num_threads=torch.get_num_threads(),
-                         out_dir=str(out))
+                         augment=AugmentConfig(enabled=bool(p.get('augment', False))), out_dir=str(out))
     if p['init'] and not (out / 'last.pt').is_file():
         out.mkdir(parents=True, exist_ok=True)
         initialise_from(run_dir / p['init'] / 'last.pt', config, out)
@@ -140,5 +143,15 @@ def run_evaluate(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None
                               f'{p["model"]} on the {p["test"]} test sequence ({p["calibration"]} calibration)')
 
 
+def run_readers(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
+    from matrix_core.experiments.table3 import foot_point_agreement, shared_path
+
+    root = shared_path(p['dataset'])
+    if not root.is_dir():
+        raise StepUnavailable(f'{root} is missing (set MATRIX_SHARED to the shared data folder)')
+    out.mkdir(parents=True, exist_ok=True)
+    (out / 'metrics.json').write_text(json.dumps({**p, 'path': str(root), **foot_point_agreement(root)}, indent=2))
+
+
 EXECUTORS = {'simulate': run_simulate, 'calibrate': run_calibrate, 'register': run_register, 'train': run_train,
-             'evaluate': run_evaluate}
+             'evaluate': run_evaluate, 'readers': run_readers}

@@ -125,11 +125,11 @@ class Registrar:
         s = self.settings
         cam = self.reference.camera
         pairs = match_symmetric(cur.desc, target.desc, s.ratio, s.matcher)
-        cv2.setRNGSeed(s.seed)
         # Fit in reference pixels, so that the inlier threshold is in full-resolution reference pixels.
         dst = cv2.perspectiveTransform(target.xy[pairs[:, 1]].reshape(-1, 1, 2), target_to_ref).reshape(-1, 2) \
             if len(pairs) else np.zeros((0, 2))
-        fit = fit_homography(cur.xy[pairs[:, 0]], dst, s.estimator, s.ransac_threshold_px, s.ransac_iterations)
+        fit = fit_homography(cur.xy[pairs[:, 0]], dst, s.estimator, s.ransac_threshold_px, s.ransac_iterations,
+                             seed=s.seed)
         matches, inliers = len(pairs), int(fit.inliers.sum())
         args = (matches, inliers, fit.error_px, start)
         if fit.H is None:

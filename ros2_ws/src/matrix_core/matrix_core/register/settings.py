@@ -22,7 +22,11 @@ class RegisterSettings:
         'help': 'SIFT contrastThreshold; the OpenCV default 0.04 finds almost nothing on the plaza concrete'})
     ratio: float = field(default=0.8, metadata={'help': "Lowe's ratio test threshold tau (both directions)"})
     matcher: str = field(default='flann', metadata={'help': 'nearest-neighbour search: flann or brute'})
-    estimator: str = field(default='magsac', metadata={'help': 'robust homography estimator: ransac or magsac'})
+    estimator: str = field(default='magsac', metadata={
+        'help': "robust homography estimator: magsac (default: OpenCV's USAC_MAGSAC, deterministic and the more "
+                "accurate with few or noisy matches, so the live graph gives the same homographies on every "
+                "replay) or ransac (the MATRIX paper's plain RANSAC, seeded by `seed`; its run-to-run variation "
+                "is what the paper's 10 runs measure)"})
     ransac_threshold_px: float = field(default=3.0, metadata={
         'help': 'inlier threshold in FULL-resolution pixels of the reference image'})
     ransac_iterations: int = field(default=5000, metadata={'help': 'maximum robust-estimator iterations'})
@@ -60,7 +64,9 @@ class RegisterSettings:
                 'chained frame is weak; it takes over again when good (0 = never)'})
     good_confidence: float = field(default=0.25, metadata={
         'help': 'a frame with at least this confidence (and passing the gate) may become a key frame'})
-    seed: int = field(default=0, metadata={'help': 'random seed of the robust estimator (reproducible results)'})
+    seed: int = field(default=0, metadata={
+        'help': 'random seed of the ransac estimator: the same seed repeats its homographies, other seeds '
+                'draw other samples (magsac is deterministic and ignores it)'})
 
     def __post_init__(self):
         from matrix_core.register.backends import BACKENDS
