@@ -76,6 +76,22 @@ class MatrixDataset(MultiviewDataset):
         return tuple(sorted(common or ()))
 
     @cached_property
+    def incomplete_frames(self) -> dict:
+        """frame -> why it is not in :attr:`frames`: frames some view has an image or calibration of, but not
+        every view both (named per view), so that a command can report them instead of dropping them silently."""
+        have = {}
+        for view in self.views:
+            images = set(numbered_stems(self.root / 'image_subsets' / view))
+            calibrated = self._calibrated.get(conv.drone_number(view), set())
+            have[view] = (images, calibrated)
+        out = {}
+        for frame in sorted(set().union(*(a | b for a, b in have.values())) - set(self.frames)):
+            lacking = [f'{v} {"/".join(w for w, s in (("image", a), ("calibration", b)) if frame not in s)}'
+                       for v, (a, b) in have.items() if frame not in a or frame not in b]
+            out[frame] = 'no ' + ', '.join(lacking)
+        return out
+
+    @cached_property
     def annotated_frames(self) -> tuple:
         folder = self.root / 'annotations_positions'
         return tuple(numbered_stems(folder, ('.json',))) if folder.is_dir() else ()
