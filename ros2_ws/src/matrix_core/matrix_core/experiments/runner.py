@@ -4,7 +4,9 @@ A step writes into ``<run>/<name>/``; its params go to ``<run>/steps/<name>.star
 ``.done.json`` (with the wall time) after. A step started with other params, or unfinished, is redone
 from an empty folder - except an unfinished training, which resumes from its ``last.pt``. A step that
 fails is logged (``<name>.error.txt``) and the steps that need it are skipped; the run goes on, and
-``run.json`` lists every step's state for the report.
+``run.json`` lists every step's state for the report (rewritten after each step, so a run killed midway
+says how far it got). Inside an evaluation step, a frame that fails is not scored and a view whose image or
+calibration fails is masked; its ``metrics.json`` lists them (``failures``).
 """
 
 import dataclasses
@@ -82,6 +84,10 @@ def run_plan(plan: list, size, run_dir, threads: int = 1, progress: bool = True,
     torch.set_num_threads(threads)
     started = time.time()
     states = {}
+    summary = {'size': {**dataclasses.asdict(size), 'transfer_frames': size.transfer_frames},
+               'machine': machine_info(threads, Path(repo or Path.cwd())),
+               'started_utc': time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime(started)),
+               'wall_s': 0.0, 'steps': states}
     bar = tqdm(plan, desc=f'experiments ({size.name})', unit='step', disable=not progress)
     for step in bar:
         bar.set_postfix_str(step.name)
@@ -89,14 +95,18 @@ def run_plan(plan: list, size, run_dir, threads: int = 1, progress: bool = True,
         if blocked:
             was = states.get(blocked[0], {}).get('state', 'not planned')
             states[step.name] = {'state': SKIPPED, 'reason': f'needs {blocked[0]}, which was {was}'}
-            continue
-        states[step.name] = {'kind': step.kind, **run_step(step, run_dir, progress, log)}
-    summary = {'size': {**dataclasses.asdict(size), 'transfer_frames': size.transfer_frames},
-               'machine': machine_info(threads, Path(repo or Path.cwd())),
-               'started_utc': time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime(started)),
-               'wall_s': time.time() - started, 'steps': states}
-    (run_dir / RUN_FILE).write_text(json.dumps(summary, indent=2))
+        else:
+            states[step.name] = {'kind': step.kind, **run_step(step, run_dir, progress, log)}
+        _write_run(run_dir, summary, started)   # after every step: a run killed midway still says how far it got
     return summary
+
+
+def _write_run(run_dir: Path, summary: dict, started: float) -> None:
+    """``run.json`` (the steps so far), replaced atomically so a kill never leaves half a file."""
+    summary['wall_s'] = time.time() - started
+    tmp = run_dir / (RUN_FILE + '.tmp')
+    tmp.write_text(json.dumps(summary, indent=2))
+    tmp.replace(run_dir / RUN_FILE)
 
 
 def run_experiments(size, out_dir, report, images=None, threads: int = 1, progress: bool = True, log=print,
