@@ -152,7 +152,11 @@ class BagFacts:
     def read(cls, bag: str, views) -> 'BagFacts':
         if not (Path(bag) / 'metadata.yaml').is_file():
             raise FileNotFoundError(f'not a rosbag2 folder (no metadata.yaml): {bag!r}')
-        topics = bag_topics(bag)
+        try:
+            topics = bag_topics(bag)
+        except Exception as exc:  # rosbags cannot open a bag cut short or overwritten: say so before starting
+            raise ValueError(f'{bag}: damaged, cannot be read whole ({type(exc).__name__}: {exc}); bag_player '
+                             'alone replays the frames before the damage (exit code 4)') from None
         imaged = {t.split('/')[1] for t in topics if t.endswith(('/image_raw', '/image/compressed'))}
         unknown = [v for v in views if v not in imaged]
         if unknown:
@@ -172,7 +176,8 @@ class BagFacts:
 def player_exit_text(code: int) -> str:
     """What the bag player's exit code means (matrix_ros.bag_player), for run_graph's and the launch's logs."""
     return {0: ' (every frame played and processed)', 1: ' (nothing was played)',
-            3: ' (lockstep timed out for some frame)'}.get(code, '')
+            3: ' (lockstep timed out for some frame)',
+            4: ' (the bag is damaged: only the frames before the damage were played)'}.get(code, '')
 
 
 def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
