@@ -76,6 +76,7 @@ def small_bag(tmp_path_factory):
     (['views:=[D9]'], 'no images of view(s) D9 in this bag'),
     (['dataset:=/nonexistent/dataset'], 'dataset folder not found'),
     (['input_kind:=lidar'], 'input_kind must be homography or camera_info'),
+    (['lockstep_timout:=3'], "unknown launch argument(s) 'lockstep_timout' (did you mean 'lockstep_timeout'?)"),
 ])
 def test_full_graph_argument_errors_say_what_is_wrong_before_anything_starts(small_bag, arguments, message):
     given = dict(a.split(':=', 1) for a in [f'bag:={small_bag / "bag"}', f'dataset:={small_bag}', 'views:=[D1,D2]',
