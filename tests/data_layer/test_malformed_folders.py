@@ -7,6 +7,7 @@ import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from matrix_core.datasets import open_dataset
@@ -32,6 +33,16 @@ def test_bad_calibration_xml(sample, content):
     with pytest.raises(DatasetError, match=r'cannot parse calibration file .*extr_Drone3_0001\.xml'):
         ds.camera('D3', 1)
     assert ds.camera('D3', 2) is not None    # the other files still read
+
+
+def test_nan_in_a_calibration_file(sample):
+    from matrix_core.datasets.opencv_xml import write_matrices
+
+    path = sample / 'calibrations/extrinsic/extr_Drone3_0001.xml'
+    path.unlink()
+    write_matrices(path, {'rvec': [np.nan, 0.0, 0.0], 'tvec': [0.0, 0.0, 1.0]})
+    with pytest.raises(DatasetError, match=r'extr_Drone3_0001\.xml: node <rvec> is empty or not finite'):
+        open_dataset(sample).camera('D3', 1)
 
 
 def test_bad_annotation_and_meta_json(sample):
