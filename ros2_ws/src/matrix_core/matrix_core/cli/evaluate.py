@@ -75,7 +75,7 @@ def run(args) -> int:
     result.failed_frames.update({f: f'dataset: {why}' for f, why in probe.dataset.incomplete_frames.items()
                                  if in_range(f)})
     if not result.outputs:
-        raise RuntimeError(f'no frame could be evaluated:\n{result.failures_text()}')
+        raise ValueError(f'no frame could be evaluated:\n{result.failures_text()}')
     print(format_metrics(result.detection, result.tracking))
     if result.failures_text():
         print(result.failures_text())
