@@ -95,3 +95,12 @@ def test_an_unfinished_bag_without_metadata_is_read_from_its_records(sequence, t
     assert len(got) >= 1
     _check_frames(got, sequence)
     assert connections(bag)['/D1/image_raw'] == 'sensor_msgs/msg/Image'
+
+
+def test_matrix_tracker_bag_lists_what_a_damaged_bag_holds(sequence, tmp_path, capsys):
+    bag = damaged(sequence, tmp_path, lambda b: b[:[at for op, at in record_offsets(b) if op == 0x06][1] + 5000])
+    assert main(['bag', str(bag)]) == 1
+    out, err = capsys.readouterr()
+    assert '/D1/image_raw' in out and 'sensor_msgs/msg/Image' in out
+    assert 'damaged bag:' in err and 'messages before the damage' in err
+    assert main(['bag', str(sequence / 'bag')]) == 0
