@@ -60,6 +60,23 @@ def connections(bag) -> dict:
     return found
 
 
+def topic_counts(bag) -> tuple:
+    """({topic: (message type, message count)}, damage): of the whole bag and '' when it reads whole, else
+    of the messages before the damage and the :class:`BagDamaged` text."""
+    from matrix_core.bags.reader import bag_topics
+
+    try:
+        return bag_topics(bag), ''
+    except Exception:  # cut short, overwritten, unfinished: count what can still be read
+        counts = {}
+        try:
+            for topic, msgtype, _, _ in raw_messages(bag):
+                counts[topic] = (msgtype, counts.get(topic, (msgtype, 0))[1] + 1)
+        except BagDamaged as exc:
+            return counts, str(exc)
+        return counts, ''
+
+
 def raw_messages(bag, topics=None):
     """Yield (topic, message type, bag time ns, serialized CDR bytes) of every message of ``topics`` (all
     when None) in bag-time order. A bag that cannot be read to its end yields the messages before the damage

@@ -12,7 +12,8 @@ Topics and conventions: see ``matrix_core.bags`` (README, section "Bags").
 import sys
 from pathlib import Path
 
-from matrix_core.bags import BagDamaged, bag_topics, raw_messages, write_sequence_bag
+from matrix_core.bags import write_sequence_bag
+from matrix_core.bags.salvage import topic_counts
 from matrix_core.datasets import MatrixDataset
 
 
@@ -41,16 +42,7 @@ def run(args) -> int:
 
 def _list(bag: Path) -> int:
     """Topics, types and message counts of a bag; of a damaged one, those before the damage, then why (1)."""
-    try:
-        topics, damage = bag_topics(bag), ''
-    except Exception:  # cut short, overwritten, unfinished: count what can still be read
-        counts, damage = {}, 'unreadable'
-        try:
-            for topic, msgtype, _, _ in raw_messages(bag):
-                counts[topic] = (msgtype, counts.get(topic, (msgtype, 0))[1] + 1)
-        except BagDamaged as exc:
-            damage = str(exc)
-        topics = counts
+    topics, damage = topic_counts(bag)
     for topic, (msgtype, count) in sorted(topics.items()):
         print(f'{topic:40s} {msgtype:36s} {count:6d}')
     if damage:
