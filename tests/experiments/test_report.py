@@ -194,3 +194,14 @@ def test_report_flags_steps_older_than_the_code_they_depend_on(tmp_path):
 def test_report_needs_a_run(tmp_path):
     with pytest.raises(FileNotFoundError, match='run.json'):
         write_report(tmp_path, tmp_path / 'RESULTS.md')
+
+
+def test_report_lists_evaluations_with_failed_frames(hand_made):
+    """An evaluation step whose frames partly failed (issue 17) is listed with its counts."""
+    tmp_path, records, steps = hand_made
+    records[1] = {**records[1], 'num_frames': 10, 'failures': {'frames_failed': 2, 'frames_scored': 8,
+                                                               'views_masked': 3}}
+    write_run(tmp_path / 'run', QUICK, records, steps)
+    text = write_report(tmp_path / 'run', tmp_path / 'docs' / 'RESULTS.md').read_text()
+    assert '## Evaluations with failed frames or masked views' in text
+    assert 'complex_s0 on complex (ground_truth, views' in text and '2 of 10 frames failed, 3 views masked' in text

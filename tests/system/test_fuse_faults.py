@@ -1,6 +1,7 @@
 """Fault tests of the `fuse` node (its own process, over DDS; this test publishes the drones' streams):
 a corrupt image and a NaN homography are logged and only that view is dropped, a stopped drone makes the
-frame go out after the sync timeout with 7 views while tracking continues, and a restarted node resumes;
+frame go out after the sync timeout with 7 views while tracking continues, and a restarted node resumes
+(also one killed with SIGKILL);
 a view's images are subscribed only once its homography stream is connected (no homography lost at start)."""
 
 import numpy as np
@@ -178,3 +179,30 @@ def test_images_wait_for_the_homography_stream(node_executable):
         rclpy.shutdown(context=context)
     assert 'D2: waiting for a publisher on /D2/homography before subscribing its images' in log, log
     assert 'D1: /D1/homography connected; images subscribed' in log, log
+
+
+def test_a_killed_fuse_node_is_replaced(node_executable, tmp_path):
+    """SIGKILL mid-run (issue 17): no shutdown at all, its DDS participant left behind until it expires; a new
+    process subscribes and fuses the next frames."""
+    assert cli(['simulate', '--config', 'complex', '--frames', '3', '--seed', '9', '--fast', '--image_ext', '.jpg',
+                '--out', str(tmp_path / 'sim')]) == 0
+    drones = Drones(open_dataset(tmp_path / 'sim'))
+    fuse = _fuse(node_executable)
+    try:
+        assert drones.wait_for_fuse(), 'fuse node did not subscribe'
+        before = drones.publish(0)
+        fuse.kill()
+        fuse.communicate(timeout=30)
+        # the killed node's endpoints count until DDS finds it gone (its lease): then only the new node's count
+        assert drones.wait_for_fuse(timeout=90.0, count=0), 'the killed fuse node is still subscribed'
+        fuse = _fuse(node_executable)
+        assert drones.wait_for_fuse(), 'the new fuse node did not subscribe'
+        after = [drones.publish(k) for k in (1, 2)]
+        log = stop(fuse)
+    finally:
+        if fuse.poll() is None:
+            stop(fuse)
+        drones.close()
+    assert before in drones.tracks and all(s in drones.tracks for s in after)
+    assert 'published 2 frames' in log, log
+    assert len(drones.tracks[after[1]].tracks) > 10   # tracks are born again after birth_hits frames

@@ -76,6 +76,7 @@ def small_bag(tmp_path_factory):
     (['views:=[D9]'], 'no images of view(s) D9 in this bag'),
     (['dataset:=/nonexistent/dataset'], 'dataset folder not found'),
     (['input_kind:=lidar'], 'input_kind must be homography or camera_info'),
+    (['lockstep_timout:=3'], "unknown launch argument(s) 'lockstep_timout' (did you mean 'lockstep_timeout'?)"),
 ])
 def test_full_graph_argument_errors_say_what_is_wrong_before_anything_starts(small_bag, arguments, message):
     given = dict(a.split(':=', 1) for a in [f'bag:={small_bag / "bag"}', f'dataset:={small_bag}', 'views:=[D1,D2]',
@@ -98,6 +99,30 @@ def test_full_graph_exits_non_zero_on_a_lockstep_timeout_or_a_dead_node(small_ba
     started, ended = _started_and_stopped(run.stdout)
     assert started and started == ended, (started, ended)   # every node stopped all the same
     assert f'closed {tmp_path / "rec"}:' in run.stdout       # and the recording closed
+
+
+@pytest.mark.slow
+def test_full_graph_replays_the_frames_before_a_bag_is_cut(small_bag, tmp_path):
+    """Issue 17: a bag cut in its second frame: the graph starts, the first frame is played, fused and
+    recorded, then the launch exits 1 saying the bag is damaged; every node stopped, the recording closed."""
+    import shutil
+
+    from matrix_core.bags.salvage import mcap_file
+
+    cut = tmp_path / 'cut'
+    shutil.copytree(small_bag / 'bag', cut)
+    f = mcap_file(cut)
+    f.write_bytes(f.read_bytes()[:int(f.stat().st_size * 0.75)])
+    run = _launch_graph(f'bag:={cut}', f'dataset:={small_bag}', 'views:=[D1,D2]', 'drones_per_process:=0',
+                        f'record:={tmp_path / "rec"}', timeout_s=300)
+    assert run.returncode == 1, run.stdout[-6000:]
+    assert 'bag_player exited with code 4 (the bag is damaged: only the frames before the damage were played)' \
+        in run.stdout, run.stdout[-6000:]
+    assert 'played 1 frames up to frame 0' in run.stdout and 'messages before the damage' in run.stdout
+    started, ended = _started_and_stopped(run.stdout)
+    assert started and started == ended, (started, ended)
+    assert f'closed {tmp_path / "rec"}:' in run.stdout
+    assert (tmp_path / 'rec.tracks.txt').read_text().startswith('0 ')   # the played frame was fused, tracked
 
 
 @pytest.mark.slow

@@ -30,7 +30,7 @@ EXIT_AT_END = DeclareLaunchArgument('exit_at_end', default_value='true', descrip
 
 def _graph(context):
     """Resolved at launch time: the number of processes depends on ``views`` and ``drones_per_process``."""
-    settings = settings_from_launch(GraphSettings, context)
+    settings = settings_from_launch(GraphSettings, context, other_arguments=['exit_at_end'])
     actions = [SetEnvironmentVariable('FASTRTPS_DEFAULT_PROFILES_FILE', settings.dds_profile)] \
         if settings.dds_profile else []
     specs = graph_nodes(settings)

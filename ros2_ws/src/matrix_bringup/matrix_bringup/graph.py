@@ -17,13 +17,16 @@ with ``monitor``, when the monitor saw every stage (calib, register and tracks) 
 falls behind the replay.
 """
 
+import logging
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from matrix_core.bags import bag_topics
+from matrix_core.bags.salvage import topic_counts
 from matrix_core.datasets.matrix_conventions import MATRIX_VIEWS
 from matrix_core.settings import setting_to_string
+
+_log = logging.getLogger(__name__)
 
 VIEWS = list(MATRIX_VIEWS)
 RECORDED = (('/tracks', 'matrix_msgs/msg/TrackArray'), ('/detections', 'matrix_msgs/msg/TrackArray'),
@@ -152,7 +155,9 @@ class BagFacts:
     def read(cls, bag: str, views) -> 'BagFacts':
         if not (Path(bag) / 'metadata.yaml').is_file():
             raise FileNotFoundError(f'not a rosbag2 folder (no metadata.yaml): {bag!r}')
-        topics = bag_topics(bag)
+        topics, damage = topic_counts(bag)   # a damaged bag: what it holds before the damage (the player plays
+        if damage:                           # that and exits with code 4)
+            _log.warning(f'{damage}: replaying the frames before the damage')
         imaged = {t.split('/')[1] for t in topics if t.endswith(('/image_raw', '/image/compressed'))}
         unknown = [v for v in views if v not in imaged]
         if unknown:
@@ -172,7 +177,8 @@ class BagFacts:
 def player_exit_text(code: int) -> str:
     """What the bag player's exit code means (matrix_ros.bag_player), for run_graph's and the launch's logs."""
     return {0: ' (every frame played and processed)', 1: ' (nothing was played)',
-            3: ' (lockstep timed out for some frame)'}.get(code, '')
+            3: ' (lockstep timed out for some frame)',
+            4: ' (the bag is damaged: only the frames before the damage were played)'}.get(code, '')
 
 
 def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:

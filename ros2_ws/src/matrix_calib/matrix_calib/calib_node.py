@@ -72,7 +72,8 @@ class CalibNode(Node):
         if not s.use_registration:
             subscribe_images()
             return
-        self.syncs[view] = FrameSynchronizer(FrameSyncSettings(['image', 'registration'], s.registration_wait_s))
+        self.syncs[view] = FrameSynchronizer(FrameSyncSettings(['image', 'registration'], s.registration_wait_s,
+                                                               restart_gap=s.restart_gap_s))
         registrations = self.create_subscription(HomographyStamped, topics.drone_topic(prefix, topics.HOMOGRAPHY),
                                                  lambda m: self._on_registration(view, m), 10)
         self.connections[view] = SubscribeWhenConnected(self, view, [registrations], subscribe_images)

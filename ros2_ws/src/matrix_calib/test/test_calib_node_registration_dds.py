@@ -1,7 +1,8 @@
 """The installed ``calib`` node with ``use_registration``, in its own process over DDS: this test publishes
 real MATRIX images of drone D5 and registrations of the same stamps (ground truth, a failed one, a missing
 one, a NaN one) and checks from calib's diagnostics which frames the registration guided, and that every
-frame was still calibrated."""
+frame was still calibrated. Then the replay starts over (time goes back): the first frame again is calibrated
+afresh, not refused as late (issue 17)."""
 
 import numpy as np
 import pytest
@@ -42,7 +43,7 @@ def test_calib_follows_the_registration_and_copes_without_it(matrix_sample, node
         {round(stamp_to_seconds(m.header.stamp), 3): s for s in m.status if s.name == 'calib/D5'}), 50)
     calib = start_node(node_executable('matrix_calib', 'calib'), 'views:=[D5]', 'compressed:=true',
                        f'prior_dataset:={matrix_sample}', 'qos:=reliable', 'use_registration:=true',
-                       'registration_wait_s:=1.0')
+                       'registration_wait_s:=1.0', 'restart_gap_s:=1.0')
     try:
         assert spin_until(node, lambda: node.count_subscribers('/D5/homography') == 1, [calib], 120)
         # What is tested: for 2 s without a registration publisher, calib subscribes no images.
@@ -59,11 +60,19 @@ def test_calib_follows_the_registration_and_copes_without_it(matrix_sample, node
             if kind != 'none':
                 registrations.publish(_registration(header, dataset, frame, kind))
             assert spin_until(node, lambda: round(stamp, 3) in diags, [calib], 60), (stamp, kind)
+        first = diags.pop(1.0)
+        header = Header(stamp=seconds_to_stamp(1.0), frame_id='D5/camera_optical')   # the replay starts over
+        images.publish(image_to_compressed(dataset.load_image('D5', dataset.frames[0]), header))
+        registrations.publish(_registration(header, dataset, dataset.frames[0], 'truth'))
+        assert spin_until(node, lambda: 1.0 in diags, [calib], 60), 'the restarted replay was refused'
     finally:
         out = stop(calib)
         node.destroy_node()
         rclpy.shutdown()
     assert unconnected == 0
+    again = {kv.key: kv.value for kv in diags.pop(1.0).values}
+    assert again['status'] == 'ok' and again['guide'] == 'time went back, started afresh; registration', again
+    diags[1.0] = first
     for k, (kind, guide) in enumerate(PLAN):
         values = {kv.key: kv.value for kv in diags[round(1.0 + 0.5 * k, 3)].values}
         assert values['status'] == 'ok' and values['guide'].startswith(guide), (kind, values)

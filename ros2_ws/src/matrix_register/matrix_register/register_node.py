@@ -35,6 +35,7 @@ from matrix_ros.conversions import ConversionError, camera_info_to_camera, msg_t
 from matrix_ros.node_settings import hosted_drones
 from matrix_ros.params import declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
+from matrix_ros.restarts import DroneRestarts
 
 
 def _ns(stamp) -> int:
@@ -47,10 +48,10 @@ class RegisterNode(Node):
         self.settings = s = declare_settings(self, RegisterNodeSettings, defaults)
         s.apply_threads()
         self.backend = make_backend(s)
-        self.registrars, self.pubs, self.connections = {}, {}, {}
-        self.pairing = {}
+        self.registrars, self.pubs, self.connections, self.pairing = {}, {}, {}, {}
         self.area = tuple(s.area)
-        dataset = MatrixDataset(s.reference_dataset) if s.reference_dataset else None
+        self.dataset = dataset = MatrixDataset(s.reference_dataset) if s.reference_dataset else None
+        self.restarts = DroneRestarts(self, s.restart_gap_s, self._start_drone)
         if dataset is not None:
             self.area = dataset.area
             self.settings, note = settings_for_dataset(s, dataset)
@@ -58,10 +59,7 @@ class RegisterNode(Node):
             if note:
                 self.get_logger().info(note)
         for view, prefix in hosted_drones(self, s.views):
-            self.pairing[view] = ReferencePairing()
-            if dataset is not None:
-                self.registrars[view] = Registrar(s, dataset.reference_image(view), dataset.reference_camera(view),
-                                                  self.area, f'{view}/reference', self.backend)
+            self._start_drone(view)
             self._subscribe_view(view, prefix, needs_camera_info=dataset is None)
             self.pubs[view] = self.create_publisher(HomographyStamped, topics.drone_topic(prefix, topics.HOMOGRAPHY),
                                                     publisher_qos())
@@ -76,14 +74,22 @@ class RegisterNode(Node):
         def subscribe_images():
             msg_type, stream = (CompressedImage, topics.IMAGE_COMPRESSED) if s.compressed else (Image, s.image_topic)
             self.create_subscription(msg_type, topics.drone_topic(prefix, stream),
-                                     lambda m: self._on_image(view, m), qos_by_name(s.qos))
+                                     self.restarts.checked(view, lambda m: self._on_image(view, m)), qos_by_name(s.qos))
         if not needs_camera_info:
             subscribe_images()
             return
         info = self.create_subscription(CameraInfo, topics.drone_topic(prefix, s.camera_info_topic),
-                                        lambda m: self._run(view, self.pairing[view].camera_info(_ns(m.header.stamp), m)),
-                                        10)
+                                        self.restarts.checked(view, lambda m: self._run(
+                                            view, self.pairing[view].camera_info(_ns(m.header.stamp), m))), 10)
         self.connections[view] = SubscribeWhenConnected(self, view, [info], subscribe_images)
+
+    def _start_drone(self, view: str) -> None:
+        """The drone's reference (dataset's, or first frame with a CameraInfo); again when a replay restarts."""
+        self.pairing[view], d = ReferencePairing(), self.dataset
+        self.registrars.pop(view, None)
+        if d is not None:
+            self.registrars[view] = Registrar(self.settings, d.reference_image(view), d.reference_camera(view),
+                                              self.area, f'{view}/reference', self.backend)
 
     def _on_image(self, view: str, msg) -> None:
         try:

@@ -5,11 +5,12 @@ from dataclasses import dataclass, field
 
 from matrix_core.datasets.matrix_conventions import MATRIX_AREA
 from matrix_core.register.settings import RegisterSettings
+from matrix_core.sync import RestartSettings
 from matrix_ros.node_settings import NodeSettings
 
 
 @dataclass
-class RegisterNodeSettings(NodeSettings, RegisterSettings):
+class RegisterNodeSettings(NodeSettings, RestartSettings, RegisterSettings):
     views: list[str] = field(default_factory=lambda: ['D1'], metadata={
         'help': 'drones handled by this node; topics are <view>/... (relative: remappable, namespaceable; bare '
                 'for the drone whose namespace the node runs in; empty: that one drone)'})

@@ -3,7 +3,8 @@
 Two more processes take part: the installed ``dataset_player`` publishes frames 0000-0002 of two drones
 (a corner and a side drone, so the node handles several drones), and this test process listens to the
 homographies, checks them against the ground truth from the stored calibrations, then sends a corrupt
-image and checks that the node reports it and keeps running.
+image and checks that the node reports it and keeps running. Last, the replay starts over (frame 0 again at
+its first stamp, time going back): the drone starts afresh from its reference and registers it (issue 17).
 """
 
 import time
@@ -15,13 +16,14 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from matrix_msgs.msg import HomographyStamped
 from rclpy.node import Node
 from sensor_msgs.msg import Image
+from std_msgs.msg import Header
 
 from matrix_core.datasets import MatrixDataset
 from matrix_core.geometry.homography import apply_homography
 from matrix_core.register.evaluate import homography_error_px
 from matrix_core.register.ground_mask import visible_ground_grid
 from matrix_core.register.settings import MATRIX_BLOCK
-from matrix_ros.conversions import stamp_to_seconds
+from matrix_ros.conversions import image_to_msg, seconds_to_stamp, stamp_to_seconds
 from ros_helpers import spin_until, start_node, stop, wait_matched
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -65,6 +67,12 @@ def test_register_node_over_dds(matrix_sample, node_executable):
             bad_pub.publish(bad)
             spin_until(node, bad_reported, [register], 1.0)
         alive = register.poll() is None
+        # The replay starts over: the first frame again at its first stamp, long after the last one.
+        count = len(got[VIEWS[0]])
+        bad_pub.publish(image_to_msg(dataset.load_image(VIEWS[0], dataset.frames[0]),
+                                     Header(stamp=seconds_to_stamp(1.0), frame_id='world')))
+        spin_until(node, lambda: len(got[VIEWS[0]]) > count, [register], 60.0)
+        restarted = got[VIEWS[0]][count:]
     finally:
         node.destroy_node()
         rclpy.shutdown()
@@ -74,6 +82,9 @@ def test_register_node_over_dds(matrix_sample, node_executable):
     assert alive, f'register node died on a corrupt image; {log}'
     assert bad_reported(), f'no diagnostics error for the corrupt image; {log}'
     assert 'too short' in register_out, log
+    assert restarted and stamp_to_seconds(restarted[0].header.stamp) == 1.0, log
+    assert restarted[0].status == 'ok' and restarted[0].reference_id == f'{VIEWS[0]}/reference', restarted[0].status
+    assert f'{VIEWS[0]}: t=1.000 s: time went back, starting this drone afresh' in register_out, log
     failed = [m for m in got[VIEWS[0]] if m.header.stamp.sec == 99]   # downstream learns of it too
     assert failed and failed[0].status.startswith('failed: bad input') and not any(failed[0].h_img_to_ground), log
 

@@ -16,7 +16,8 @@ numbers the frames in the log. ``/clock`` (rosgraph_msgs/Clock) carries the bag 
 is published, so nodes started with ``use_sim_time:=true`` follow the recording. Published topics offer
 transient-local history (``matrix_ros.qos.publisher_qos``). When all frames are out the node logs it and, with
 ``exit_when_done``, exits: code 0, or 3 when lockstep timed out for some frame (the run is not
-deterministic), 1 when nothing was played.
+deterministic), 4 when the bag is damaged (cut short, overwritten: the frames before the damage were played,
+the error says where it stopped; ``matrix_core.bags.salvage``), 1 when nothing was played.
 """
 
 import time
@@ -25,10 +26,10 @@ from pathlib import Path
 import rclpy
 from rclpy.duration import Duration
 from rclpy.node import Node
-from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
 
 from matrix_core.bags.clock import read_sequence_clock
+from matrix_core.bags.salvage import BagDamaged, connections, raw_messages
 from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
 from matrix_ros.message_types import message_class
 from matrix_ros.params import parse_node_args, declare_settings
@@ -43,12 +44,10 @@ class BagPlayer(Node):
         if not (Path(s.bag) / 'metadata.yaml').is_file():
             raise FileNotFoundError(f'not a rosbag2 folder (no metadata.yaml): {s.bag}')
         self.sequence_clock = read_sequence_clock(s.bag, note=self.get_logger().warning)
-        self.reader = Reader(Path(s.bag))
-        self.reader.open()
-        self.connections = [c for c in self.reader.connections if not s.topics or c.topic in s.topics]
+        self.topics = {t: msgtype for t, msgtype in connections(s.bag).items() if not s.topics or t in s.topics}
+        self.damage = ''   # why the bag could not be played to its end ('' when it was)
         qos = publisher_qos(s.qos)
-        self.pubs = {c.topic: self.create_publisher(message_class(c.msgtype), c.topic, qos)
-                     for c in self.connections}
+        self.pubs = {t: self.create_publisher(message_class(msgtype), t, qos) for t, msgtype in self.topics.items()}
         self.clock_pub = self.create_publisher(Clock, '/clock', 10)
         self.released = {}  # stamp (s) -> lockstep messages seen
         self.timed_out = []  # stamps whose lockstep release never came
@@ -72,14 +71,20 @@ class BagPlayer(Node):
             rclpy.spin_once(self, timeout_sec=min(0.05, max(0.0, deadline - time.monotonic())))
 
     def frames(self):
-        """Yield (bag time ns, [(topic, raw bytes)]) grouped by identical bag time."""
+        """Yield (bag time ns, [(topic, raw bytes)]) grouped by identical bag time. A damaged bag ends with
+        the last whole frame before the damage (the one it cut is not played), the reason in ``damage``."""
         group, group_time = [], None
-        for conn, time_ns, raw in self.reader.messages(connections=self.connections):
-            if group and time_ns != group_time:
-                yield group_time, group
-                group = []
-            group_time = time_ns
-            group.append((conn.topic, bytes(raw)))
+        try:
+            for topic, _, time_ns, raw in raw_messages(self.settings.bag, set(self.topics)):
+                if group and time_ns != group_time:
+                    yield group_time, group
+                    group = []
+                group_time = time_ns
+                group.append((topic, raw))
+        except BagDamaged as exc:
+            self.damage = str(exc)
+            self.get_logger().error(f'{exc}; stopping after the last whole frame before the damage')
+            return
         if group:
             yield group_time, group
 
@@ -150,10 +155,9 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         played = 0
     finally:
-        node.reader.close()
         node.destroy_node()
         rclpy.try_shutdown()
-    return 1 if not played else (3 if node.timed_out else 0)
+    return 1 if not played else (4 if node.damage else 3 if node.timed_out else 0)
 
 
 if __name__ == '__main__':

@@ -30,12 +30,27 @@ def declare_arguments(cls, defaults: dict = None, required=()) -> list:
     return args
 
 
-def settings_from_launch(cls, context):
-    """``cls`` filled from the launch arguments of the same names (resolved in ``context``); validated."""
+def settings_from_launch(cls, context, other_arguments=()):
+    """``cls`` filled from the launch arguments of the same names (resolved in ``context``); validated. An
+    argument given on the command line that is neither a field nor in ``other_arguments`` (the launch file's
+    own) is a ValueError naming it, the closest and all of them: launch would ignore it silently."""
     from launch.substitutions import LaunchConfiguration
 
-    return settings_from_strings(cls, {name: LaunchConfiguration(name).perform(context)
-                                       for name, *_ in settings_fields(cls)})
+    names = [name for name, *_ in settings_fields(cls)]
+    check_arguments(context.argv or (), [*names, *other_arguments])
+    return settings_from_strings(cls, {name: LaunchConfiguration(name).perform(context) for name in names})
+
+
+def check_arguments(argv, known) -> None:
+    """ValueError for each ``name:=value`` of ``argv`` whose name is not in ``known``."""
+    import difflib
+
+    unknown = [a.split(':=', 1)[0] for a in argv if ':=' in a and a.split(':=', 1)[0] not in known]
+    if unknown:
+        hints = [f'{n!r} (did you mean {m[0]!r}?)' if (m := difflib.get_close_matches(n, known, 1)) else repr(n)
+                 for n in unknown]
+        raise ValueError(f'unknown launch argument(s) {", ".join(hints)}; the arguments are: '
+                         f'{", ".join(sorted(known))}')
 
 
 def node_parameters(settings) -> dict:

@@ -54,9 +54,28 @@ def declare_settings(node, cls, defaults=None, live=()):
             param = node.declare_parameter(name, list(default) if isinstance(default, tuple) else default,
                                            descriptor)
             values[name] = list(param.value) if isinstance(default, (list, tuple)) else param.value
+    check_no_unknown_parameters(node, [name for name, *_ in settings_fields(cls)])
     if live:
         node.add_on_set_parameters_callback(lambda params: _set_live(node, params, live))
     return cls(**values)
+
+
+def check_no_unknown_parameters(node, names) -> None:
+    """ValueError naming every parameter given to ``node`` (``-p``, ``--params-file``) that it does not have,
+    the closest of its own, and all of them: rclpy ignores such a value silently, so a typo
+    (``sync_timout:=3.0``) would leave the default in place without a word. ``qos_overrides.*`` are
+    declared later, by the publishers, and are left to rclpy."""
+    import difflib
+
+    declared = set(node._parameters)    # rclpy keeps what was given and what was declared, no public getter
+    given = getattr(node, '_parameter_overrides', {})
+    unknown = sorted(n for n in given if n not in declared and not n.startswith('qos_overrides.'))
+    if unknown:
+        known = sorted(set(names) | declared)
+        hints = [f'{n!r} (did you mean {m[0]!r}?)' if (m := difflib.get_close_matches(n, known, 1)) else repr(n)
+                 for n in unknown]
+        raise ValueError(f'{node.get_name()}: unknown parameter(s) {", ".join(hints)}; its parameters are: '
+                         f'{", ".join(known)}')
 
 
 def _set_live(node, params, live) -> SetParametersResult:

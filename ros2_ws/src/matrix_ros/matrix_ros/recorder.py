@@ -9,7 +9,10 @@ a moment late loses nothing; a volatile publisher needs ``qos:=reliable``. With 
 frame), the format ``matrix-tracker score`` reads. The sequence clock (``start_time``, ``frame_period``) is the
 one stored in ``sequence_bag`` (the bag being replayed; see ``matrix_core.bags.clock``), else the default
 (1.0 s, 0.5 s); the parameters override it. The recorder's bag stores the clock it used, as a sequence bag
-does. The bag is closed cleanly on Ctrl-C / SIGTERM.
+does. The bag is closed cleanly on Ctrl-C / SIGTERM; what was received is also put on disk every
+``flush_period_s``, so a recorder that is killed keeps a bag whose messages up to the last flush are read back
+by ``matrix_core.bags.read_bag`` (which then raises ``BagDamaged``: no ``metadata.yaml``, no index) and its MOT
+text, written line by line.
 """
 
 import math
@@ -17,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ament_index_python.packages import get_package_share_directory, PackageNotFoundError
+from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
@@ -39,6 +43,9 @@ class RecorderSettings:
         'help': 'the sequence bag being replayed: its stored clock numbers the MOT frames (empty: 1.0 s, 0.5 s)'})
     start_time: float = field(default=math.nan, metadata={'help': 'stamp of frame 0, seconds (NaN: the clock\'s)'})
     frame_period: float = field(default=math.nan, metadata={'help': 'seconds between frames (NaN: the clock\'s)'})
+    flush_period_s: float = field(default=1.0, metadata={
+        'help': 'write what was received to disk every this many (wall) seconds, so a recorder that is killed '
+                'loses at most that much (0: only when closed)'})
     qos: str = field(default='history', metadata={
         'help': 'QoS of the subscriptions: history (transient local: also what was published before matching), '
                 'reliable (volatile publishers) or sensor_data'})
@@ -48,6 +55,8 @@ class RecorderSettings:
             raise ValueError(f'topics ({len(self.topics)}) and types ({len(self.types)}) must pair up')
         if self.frame_period <= 0:
             raise ValueError('frame_period must be positive')
+        if not self.flush_period_s >= 0:
+            raise ValueError(f'flush_period_s must be >= 0, got {self.flush_period_s}')
         qos_by_name(self.qos)
 
     def clock(self) -> SequenceClock:
@@ -96,7 +105,19 @@ class Recorder(Node):
             self.mot = open(s.mot_file or f'{s.out}.tracks.txt', 'w')
             self.create_subscription(message_class('matrix_msgs/msg/TrackArray'), s.tracks_topic, self._tracks,
                                      qos_by_name(s.qos, 100))
+        if s.flush_period_s > 0:   # wall time: under use_sim_time the bag's clock may stop or go back
+            self.create_timer(s.flush_period_s, self.flush, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(f'recording {len(s.topics)} topics to {s.out}; frames: {self.clock.describe()}')
+
+    def flush(self) -> None:
+        """Put the messages received so far on disk as a finished MCAP chunk. rosbags keeps up to 1 MiB in
+        memory and writes the file's index only on close: a recorder killed (SIGKILL, power) would lose all of
+        a slow stream. Its chunks on disk are read back by ``matrix_core.bags.salvage`` (this uses the
+        MCAP storage's own chunk writer; rosbags is pinned in constraints.txt)."""
+        storage = getattr(self.writer, 'storage', None)
+        if storage is not None and getattr(storage, 'chunk', None) is not None and storage.chunk.msgs:
+            storage.close_chunk()
+            storage.bio.flush()
 
     def _write(self, conn, topic, raw: bytes):
         self.writer.write(conn, self.get_clock().now().nanoseconds, raw)

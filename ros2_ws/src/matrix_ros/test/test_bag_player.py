@@ -136,3 +136,37 @@ def test_start_at_releases_frames_together_and_skips_frames_due_before_ready(sam
     assert d3[0] >= start_at - 0.05 and np.abs(d3 - d5).max() < 0.3, (d3 - start_at, d5 - start_at)
     assert np.diff(d3) == pytest.approx(0.5, abs=0.2)   # the recorded timing from start_at on
     assert late.returncode == 1 and 'skipped 5 frames due before it was ready' in late_out, late_out
+def test_a_bag_cut_short_plays_its_frames_before_the_cut_and_says_so(sample_bag, node_executable, tmp_path):
+    """A copy of the sample bag cut in its second half (issue 17): the whole frames before the cut are played,
+    the player exits with code 4 and says where and why it stopped; no hang."""
+    import shutil
+
+    from matrix_core.bags.salvage import BagDamaged, mcap_file, raw_messages
+
+    bag = tmp_path / 'cut'
+    shutil.copytree(sample_bag, bag)
+    f = mcap_file(bag)
+    f.write_bytes(f.read_bytes()[:int(f.stat().st_size * 0.7)])
+    times = []   # of the played topics' messages before the cut: a frame is whole once a later one began
+    with pytest.raises(BagDamaged):
+        times.extend(t for _, _, t, _ in raw_messages(bag, {'/D3/image/compressed', '/D3/ground_truth/camera_info'}))
+    whole = sorted(set(times))[:-1]
+    assert 1 <= len(whole) < 5, whole
+    infos = []
+    rclpy.init()
+    node = rclpy.create_node('bag_cut_test')
+    node.create_subscription(CompressedImage, '/D3/image/compressed', lambda m: None, 10)   # the player waits for it
+    node.create_subscription(CameraInfo, '/D3/ground_truth/camera_info', infos.append, 10)
+    player = _player(node_executable, bag, 'rate:=20.0')
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and player.poll() is None:
+        rclpy.spin_once(node, timeout_sec=0.1)
+    for _ in range(10):
+        rclpy.spin_once(node, timeout_sec=0.1)
+    out = finish(player, 10)
+    node.destroy_node()
+    rclpy.shutdown()
+    assert player.returncode == 4, out
+    assert [round(stamp_to_seconds(i.header.stamp) * 1e9) for i in infos] == whole, out
+    assert 'messages before the damage' in out and 'stopping after the last whole frame before the damage' in out
+    assert f'played {len(whole)} frames' in out, out

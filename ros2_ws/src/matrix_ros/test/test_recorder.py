@@ -95,3 +95,48 @@ def test_clock_comes_from_the_sequence_bag_and_parameters_override_it(tmp_path):
     assert RecorderSettings(sequence_bag=str(tmp_path / 'bag')).clock() == clock
     assert RecorderSettings(sequence_bag=str(tmp_path / 'bag'), frame_period=1.0).clock() == SequenceClock(3.0, 1.0)
     assert RecorderSettings(start_time=0.0).clock() == SequenceClock(0.0, 0.5)
+
+
+def test_a_killed_recorder_keeps_what_it_flushed(matrix_sample, node_executable, tmp_path):
+    """SIGKILL mid-run (issue 17): no metadata.yaml and no index are written, but every message received
+    before the last flush is read back, then BagDamaged says the bag is unfinished; the MOT text is whole."""
+    from matrix_core.bags import BagDamaged, raw_messages
+
+    ds = MatrixDataset(matrix_sample)
+    out = tmp_path / 'rec'
+    rclpy.init()
+    node = rclpy.create_node('recorder_kill_test')
+    rec = None
+    try:
+        info_pub = node.create_publisher(CameraInfo, '/D2/camera_info', publisher_qos())
+        track_pub = node.create_publisher(TrackArray, '/tracks', publisher_qos())
+        rec = start_node(node_executable('matrix_ros', 'recorder'), f'out:={out}', 'flush_period_s:=0.2',
+                         'topics:=[/D2/camera_info,/tracks]', 'tracks_topic:=/tracks',
+                         'types:=[sensor_msgs/msg/CameraInfo,matrix_msgs/msg/TrackArray]')
+        wait_matched(node, [info_pub], [rec], 60)
+        wait_matched(node, [track_pub], [rec], 60, count=2)
+        for i in range(3):
+            header = Header(stamp=seconds_to_stamp(1.0 + 0.5 * i), frame_id='world')
+            info_pub.publish(camera_to_camera_info(ds.camera('D2', i), header))
+            track_pub.publish(TrackArray(header=header, tracks=[Track(id=7, position=Point(x=1.0 + i, y=-2.0))]))
+        for pub in (info_pub, track_pub):
+            pub.wait_for_all_acked(rclpy.duration.Duration(seconds=5))
+        time.sleep(1.5)   # received is not yet flushed: several flush periods
+        rec.kill()
+        rec.communicate(timeout=30)
+    finally:
+        if rec is not None and rec.poll() is None:
+            rec.kill()
+            rec.communicate()
+        node.destroy_node()
+        rclpy.shutdown()
+    assert rec.returncode == -signal.SIGKILL and not (out / 'metadata.yaml').exists()
+    got, infos = [], []
+    with pytest.raises(BagDamaged, match=' 6 messages before the damage'):
+        got.extend(topic for topic, _, _, _ in raw_messages(out))
+    assert sorted(got) == ['/D2/camera_info'] * 3 + ['/tracks'] * 3
+    with pytest.raises(BagDamaged, match=' 3 messages before the damage'):
+        infos.extend(m.msg for m in read_bag(out, ['/D2/camera_info']))
+    assert list(infos[2].p) == pytest.approx(list(camera_to_camera_info(ds.camera('D2', 2)).p))
+    assert (tmp_path / 'rec.tracks.txt').read_text().split('\n')[:3] == \
+        ['0 7 1.0000 -2.0000', '1 7 2.0000 -2.0000', '2 7 3.0000 -2.0000']

@@ -22,7 +22,8 @@ import importlib
 # pull in rosbags and the message code.
 _MODULE_OF = {'SequenceClock': 'clock', 'DEFAULT_CLOCK': 'clock', 'read_sequence_clock': 'clock',
               'BagMessage': 'reader', 'bag_topics': 'reader', 'read_bag': 'reader', 'read_sequence_frames': 'reader',
-              'SequenceBagWriter': 'writer', 'write_sequence_bag': 'writer'}
+              'SequenceBagWriter': 'writer', 'write_sequence_bag': 'writer', 'BagDamaged': 'salvage',
+              'raw_messages': 'salvage'}
 
 __all__ = sorted(_MODULE_OF)
 

@@ -7,6 +7,7 @@ import numpy as np
 from rosbags.rosbag2 import Reader
 
 from matrix_core.bags import messages as m
+from matrix_core.bags.salvage import raw_messages
 from matrix_core import topics as t
 
 
@@ -27,12 +28,11 @@ def bag_topics(path) -> dict:
 
 
 def read_bag(path, topics=None):
-    """Yield :class:`BagMessage` in bag-time order, optionally only for ``topics`` (iterable of names)."""
-    with Reader(Path(path)) as reader:
-        conns = [c for c in reader.connections if topics is None or c.topic in set(topics)]
-        for conn, time_ns, raw in reader.messages(connections=conns):
-            msg = m.TYPESTORE.deserialize_cdr(raw, conn.msgtype)
-            yield BagMessage(conn.topic, conn.msgtype, time_ns, msg)
+    """Yield :class:`BagMessage` in bag-time order, optionally only for ``topics`` (iterable of names). A
+    damaged or unfinished bag yields the messages before the damage, then raises
+    :class:`~matrix_core.bags.salvage.BagDamaged` (see there)."""
+    for topic, msgtype, time_ns, raw in raw_messages(path, None if topics is None else set(topics)):
+        yield BagMessage(topic, msgtype, time_ns, m.TYPESTORE.deserialize_cdr(raw, msgtype))
 
 
 @dataclass
@@ -49,7 +49,9 @@ def read_sequence_frames(path):
     """Yield :class:`SequenceFrame` per header stamp of a sequence bag (see the package docstring).
 
     A frame is complete when the stamp changes, so the bag must be in time order (as written by
-    :class:`~matrix_core.bags.writer.SequenceBagWriter`). Raises ValueError on a malformed message.
+    :class:`~matrix_core.bags.writer.SequenceBagWriter`). Raises ValueError on a malformed message. A damaged
+    bag yields its whole frames before the damage, then raises :class:`~matrix_core.bags.salvage.BagDamaged`
+    (the frame the damage cut is not yielded in part).
     """
     current, poses, ids = None, None, None
 

@@ -15,15 +15,19 @@ that view and frame: the view is then masked for that frame, nothing is invented
     - ``registration``: ``DIR/registration/Drone{N}_{TTTT}.json`` of ``matrix-tracker register DATASET
       --out DIR`` (read by ``register.file_frame``: the registration contract's file form);
       frames whose status is not ``ok`` are masked.
+
+A result file that exists but cannot be used (malformed XML, NaN or singular matrices, a record that says ok
+without a usable homography) raises :class:`DatasetError` saying why; ``BevFrames`` masks that view for that
+frame and keeps the reason.
 """
 
 import csv
-import json
 from pathlib import Path
 
 
 from matrix_core.datasets.types import DatasetError
-from matrix_core.register.file_frame import record_name, registration_from_record
+from matrix_core.datasets.matrix_conventions import drone_number
+from matrix_core.register.file_frame import BROKEN_RECORD, read_registration
 
 
 def _from_cameras(camera_of):
@@ -79,10 +83,10 @@ def _pnp_factory(accepted: tuple, name: str):
         def camera_of(view, frame):
             if statuses and statuses.get((view, frame)) not in accepted:
                 return None
-            try:    # the same MATRIX reader as the dataset's, on DIR's calibration files
-                return dataset._camera_from(path / 'calibrations', view, frame, size)
-            except DatasetError:
+            if not (path / 'calibrations/extrinsic' / f'extr_Drone{drone_number(view)}_{frame:04d}.xml').is_file():
                 return None     # no file written: calibrate had no result for this view and frame
+            # the same MATRIX reader as the dataset's, on DIR's calibration files; a broken file raises
+            return dataset._camera_from(path / 'calibrations', view, frame, size)
         return _from_cameras(camera_of)
     return factory
 
@@ -92,11 +96,14 @@ def _registration(dataset, frames, calibration_dir):
     size = dataset.image_size
 
     def homography_of(view, frame):
-        f = path / 'registration' / record_name(view, frame)
-        if not f.is_file():
+        registration = read_registration(path / 'registration', view, frame)
+        if registration is None:
             return None
-        registration = registration_from_record(json.loads(f.read_text()), str(f))
-        return (registration.img_H_ground, size) if registration.ok else None
+        if registration.ok:
+            return registration.img_H_ground, size
+        if any(m in registration.message for m in BROKEN_RECORD):  # a file that said ok holds no usable homography
+            raise DatasetError(registration.message)
+        return None     # register failed this frame: no result
     return homography_of
 
 

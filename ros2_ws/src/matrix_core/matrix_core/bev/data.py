@@ -11,6 +11,8 @@ from matrix_core.bev.lifting import feat_H_grid
 from matrix_core.bev.settings import BevSettings
 from matrix_core.bev.targets import bev_targets
 from matrix_core.datasets import open_dataset
+from matrix_core.datasets.types import DatasetError
+from matrix_core.register.registration import check_homography
 
 MEAN = np.array([0.485, 0.456, 0.406], np.float32)
 STD = np.array([0.229, 0.224, 0.225], np.float32)
@@ -47,7 +49,9 @@ class BevFrames(torch.utils.data.Dataset):
     ``feat_H_grid`` (V, 3, 3) float32, ``view_mask`` (V,) bool, the target arrays of :func:`bev_targets`,
     ``frame`` int, and ``prev_frame`` (the previous frame of the sequence, -1 for the first). Views missing
     in ``views``, and views the calibration source has no homography for in a frame (PnP failed,
-    registration failed), are masked out for that frame.
+    registration failed), are masked out for that frame; so are views whose image or calibration cannot be
+    used in a frame (unreadable, corrupt or wrong-size image, broken calibration file, NaN or singular
+    homography), with the reason in :attr:`failures`.
 
     Args:
         root: MATRIX folder.
@@ -80,23 +84,30 @@ class BevFrames(torch.utils.data.Dataset):
         self._cache = {} if cache_images else None
         self.stride = SmallEncoder.stride  # input pixels per feature pixel, as BevFusionNet.stride
         self.augment = augment if augment is not None and augment.enabled else None
+        self.failures = {}  # (view, frame) -> why that view was masked in that frame (image or calibration)
 
     def __len__(self) -> int:
         return len(self.frames)
 
-    def rgb(self, view: str, frame: int) -> np.ndarray:
-        """(h, w, 3) uint8 RGB of one view at the input size (cached when ``cache_images``)."""
+    def rgb(self, view: str, frame: int, expected_size: tuple = None) -> np.ndarray:
+        """(h, w, 3) uint8 RGB of one view at the input size (cached when ``cache_images``);
+        :class:`DatasetError` when the file cannot be read or its (w, h) is not ``expected_size`` (the size its
+        calibration is for)."""
         key = (view, frame)
         if self._cache is not None and key in self._cache:
             return self._cache[key]
-        rgb = resize_rgb(self.dataset.load_image(view, frame), self.input_size)
+        bgr = self.dataset.load_image(view, frame)
+        if expected_size is not None and (bgr.shape[1], bgr.shape[0]) != tuple(expected_size):
+            raise DatasetError(f'image of {view} frame {frame} is {bgr.shape[1]}x{bgr.shape[0]}, its calibration '
+                               f'is for {expected_size[0]}x{expected_size[1]}')
+        rgb = resize_rgb(bgr, self.input_size)
         if self._cache is not None:
             self._cache[key] = rgb      # uint8: a quarter of the memory of the float input
         return rgb
 
-    def image(self, view: str, frame: int) -> np.ndarray:
-        """(3, h, w) float32 normalised network input of one view."""
-        return normalise_rgb(self.rgb(view, frame))
+    def image(self, view: str, frame: int, expected_size: tuple = None) -> np.ndarray:
+        """(3, h, w) float32 normalised network input of one view (errors as :meth:`rgb`)."""
+        return normalise_rgb(self.rgb(view, frame, expected_size))
 
     def homographies(self, frame: int) -> np.ndarray:
         """(V, 3, 3) float32 ``feat_H_grid`` of every view at ``frame`` (zeros where the source has none)."""
@@ -105,26 +116,44 @@ class BevFrames(torch.utils.data.Dataset):
     def homographies_and_availability(self, frame: int) -> tuple:
         """(feat_H_grid (V, 3, 3) float32, available (V,) bool) at ``frame``; a view without a homography
         from the calibration source gets zeros (nothing lies in front of it) and available False."""
-        out, available = [], []
-        for v in self.views:
-            h = self.homography_of(v, frame)
-            available.append(h is not None)
-            out.append(np.zeros((3, 3)) if h is None else
-                       feat_H_grid(h[0], self.grid.ground_H_grid, h[1], self.input_size, self.stride))
-        return np.stack(out).astype(np.float32), np.array(available, dtype=bool)
+        geometry = [self._view_geometry(v, frame) for v in self.views]
+        return (np.stack([np.zeros((3, 3)) if g is None else g[0] for g in geometry]).astype(np.float32),
+                np.array([g is not None for g in geometry], dtype=bool))
+
+    def _view_geometry(self, view: str, frame: int):
+        """(feat_H_grid (3, 3), image (w, h)) of ``view`` at ``frame``, or None when the source has no result
+        for it or its result cannot be used; the reason of the latter goes to :attr:`failures`."""
+        try:
+            h = self.homography_of(view, frame)
+            if h is None:
+                return None
+            img_H_ground = check_homography(h[0], f'img_H_ground of {view} frame {frame}')
+            H = check_homography(feat_H_grid(img_H_ground, self.grid.ground_H_grid, h[1], self.input_size,
+                                             self.stride), f'feat_H_grid of {view} frame {frame}')
+            return H, tuple(h[1])
+        except Exception as exc:  # one view's broken calibration masks that view, never the run
+            self.failures[(view, frame)] = f'calibration: {type(exc).__name__}: {exc}'
+            return None
 
     def inputs(self, frame: int, rng: np.random.Generator = None) -> dict:
         """Network inputs of one frame: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3), ``view_mask`` (V,).
         With ``rng`` and an enabled ``augment``, each view is augmented independently and its
-        ``feat_H_grid`` follows its scale-and-crop."""
-        H, available = self.homographies_and_availability(frame)
-        mask = np.array([v in self.use_views for v in self.views]) & available
+        ``feat_H_grid`` follows its scale-and-crop. A view whose image or calibration cannot be used is masked
+        and its reason kept in :attr:`failures`."""
+        geometry = [self._view_geometry(v, frame) for v in self.views]
+        mask = np.array([v in self.use_views and g is not None for v, g in zip(self.views, geometry)])
+        H = np.stack([np.zeros((3, 3)) if g is None else g[0] for g in geometry]).astype(np.float32)
         images = np.zeros((len(self.views), 3, self.input_size[1], self.input_size[0]), np.float32)
         augment = self.augment if rng is not None else None
         for i, v in enumerate(self.views):
             if not mask[i]:
                 continue
-            rgb = self.rgb(v, frame)
+            try:
+                rgb = self.rgb(v, frame, geometry[i][1])
+            except Exception as exc:  # unreadable, corrupt or wrong-size image: that view is masked
+                self.failures[(v, frame)] = f'image: {type(exc).__name__}: {exc}'
+                mask[i] = False
+                continue
             if augment is not None:
                 rgb, aug_H_input = augment_view(rgb, augment, rng, PAD_RGB)
                 H[i] = augment_feat_H_grid(H[i].astype(np.float64), aug_H_input, self.stride)

@@ -41,13 +41,23 @@ class SequenceRunner:
         return FrameOutput(frame, dets, torch.sigmoid(out['heatmap'][0, 0]).numpy())
 
 
-def run_frames(model, frames_data, progress: bool = True) -> list:
-    """:class:`FrameOutput` of every frame of a :class:`~matrix_core.bev.data.BevFrames`, in order."""
+def run_frames(model, frames_data, progress: bool = True, failures: dict = None) -> list:
+    """:class:`FrameOutput` of every frame of a :class:`~matrix_core.bev.data.BevFrames`, in order.
+
+    A frame whose inputs or model step raises is left out, its reason stored in ``failures`` (frame -> text;
+    without it the error propagates), and the temporal features are reset: the next frame is never fused
+    with features of a frame before the gap."""
     from tqdm import tqdm
 
     runner = SequenceRunner(model, frames_data.settings, frames_data.grid)
     out = []
     for frame in tqdm(frames_data.frames, desc='inference', unit='frame', disable=not progress, leave=False):
-        x = frames_data.inputs(frame)
-        out.append(runner.step(frame, x['images'], x['feat_H_grid'], x['view_mask']))
+        try:
+            x = frames_data.inputs(frame)
+            out.append(runner.step(frame, x['images'], x['feat_H_grid'], x['view_mask']))
+        except Exception as exc:
+            if failures is None:
+                raise
+            failures[frame] = f'inference: {type(exc).__name__}: {exc}'
+            runner.reset()
     return out

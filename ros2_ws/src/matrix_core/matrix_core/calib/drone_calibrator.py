@@ -35,6 +35,7 @@ from matrix_core.calib.scene import CalibScene
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.geometry.camera import Camera, rotation_angle_deg
 from matrix_core.register.registration import Registration
+from matrix_core.sync.stamp_restart import StampRestart
 
 OK, STALE, FAILED = 'ok', 'stale', 'failed'
 
@@ -101,12 +102,19 @@ class DroneCalibrator:
                  initial_image: np.ndarray = None):
         self.scene = scene
         self.settings = settings
-        self.prior = None if initial_prior is None else scene.camera(initial_prior.cam_T_world)
+        self.initial = (initial_prior, initial_image)
+        self.restart = StampRestart(settings.restart_gap_s)
+        self.start_afresh()
+
+    def start_afresh(self) -> None:
+        """Back to the first prior: when made, and when the stamps went back (a replay started over)."""
+        initial_prior, initial_image = self.initial
+        self.prior = None if initial_prior is None else self.scene.camera(initial_prior.cam_T_world)
         self.prior_is_initial = True
         self.tracked_in_a_row = 0   # good frames since the last searched one
         self.last_good = None
         self.last_good_stamp = None
-        self.image_motion = PriorImageMotion(settings, None if initial_image is None else _gray(initial_image))
+        self.image_motion = PriorImageMotion(self.settings, None if initial_image is None else _gray(initial_image))
 
     @property
     def previous_features(self):
@@ -132,6 +140,9 @@ class DroneCalibrator:
         camera predicts the boards (a prior independent of earlier frames) and the image motion is not
         measured."""
         t_start = time.perf_counter()
+        restarted = self.restart.went_back(stamp)
+        if restarted:    # the old run's last pose is no prior for the new run's first frame
+            self.start_afresh()
         # Every RANSAC below draws from OpenCV's global RNG: seeding it per image makes the result depend on
         # this image and this drone's history only, not on other drones sharing the process.
         cv2.setRNGSeed(self.settings.seed)
@@ -144,6 +155,7 @@ class DroneCalibrator:
         frame = _Frame(gray, stamp, t_start)
         try:
             guide, how = registered_camera(self.scene, registration)
+            how = ('time went back, started afresh; ' if restarted else '') + how
             return self._guided(frame, guide, how) if guide is not None else self._from_prior(frame, how)
         except cv2.error as exc:   # an OpenCV assertion on one odd frame must not end the drone's calibration
             return self._stale(stamp, f'OpenCV error, frame skipped: {str(exc).strip().splitlines()[-1]}')

@@ -3,9 +3,11 @@ the ``calib`` node, same names and defaults (see ``matrix_core.settings``)."""
 
 from dataclasses import dataclass, field
 
+from matrix_core.sync.stamp_restart import RestartSettings
+
 
 @dataclass
-class CalibSettings:
+class CalibSettings(RestartSettings):
     config: str = field(default='', metadata={
         'help': 'scene YAML: boards, intrinsics, optional initial poses (see matrix_calib/config/*.yaml); '
                 'empty = the MATRIX sample config shipped with matrix_core'})
@@ -92,6 +94,7 @@ class CalibSettings:
                 'same whether drones share a process or not'})
 
     def __post_init__(self):
+        super().__post_init__()
         if self.pattern_size < 3:
             raise ValueError('pattern_size must be >= 3')
         if self.px_per_square < 3 or self.margin_cells < 0 or self.initial_margin_cells < 0:

@@ -3,12 +3,17 @@
     matrix-tracker bag ../shared/matrix_sample --out bags/matrix_sample      # write
     matrix-tracker bag bags/matrix_sample                                     # list topics and counts
 
+A damaged bag (cut short, overwritten, left by a killed writer) is listed with the messages before the
+damage, then the reason, and exit code 1.
+
 Topics and conventions: see ``matrix_core.bags`` (README, section "Bags").
 """
 
+import sys
 from pathlib import Path
 
-from matrix_core.bags import bag_topics, write_sequence_bag
+from matrix_core.bags import write_sequence_bag
+from matrix_core.bags.salvage import topic_counts
 from matrix_core.datasets import MatrixDataset
 
 
@@ -23,10 +28,8 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     source = Path(args.source)
-    if (source / 'metadata.yaml').is_file():
-        for topic, (msgtype, count) in sorted(bag_topics(source).items()):
-            print(f'{topic:40s} {msgtype:36s} {count:6d}')
-        return 0
+    if (source / 'metadata.yaml').is_file() or (source.is_dir() and any(source.glob('*.mcap'))):
+        return _list(source)
     if not args.out:
         raise ValueError('--out BAG is required to write a bag (or give a bag folder to list it)')
     out = Path(args.out)
@@ -35,3 +38,13 @@ def run(args) -> int:
     path = write_sequence_bag(MatrixDataset(source), out, compressed=args.compressed)
     print(f'wrote {path}')
     return 0
+
+
+def _list(bag: Path) -> int:
+    """Topics, types and message counts of a bag; of a damaged one, those before the damage, then why (1)."""
+    topics, damage = topic_counts(bag)
+    for topic, (msgtype, count) in sorted(topics.items()):
+        print(f'{topic:40s} {msgtype:36s} {count:6d}')
+    if damage:
+        print(f'damaged bag: {damage}', file=sys.stderr)
+    return 1 if damage else 0

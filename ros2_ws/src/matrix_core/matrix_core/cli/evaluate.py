@@ -7,6 +7,12 @@ at the track's detection of the frame, projected with the camera the calibration
 intrinsics, as the live fuse node does), scored against the annotated boxes at IoU >= ``--iou`` per drone
 and overall (``metrics.image_boxes``); written as ``boxes_2d.txt`` (``frame,id,x,y,w,h,score,drone``) and
 drawn for one frame in ``boxes_2d_FRAME.png``.
+
+No frame ends the run: a view whose image or calibration cannot be used in a frame (unreadable, corrupt or
+wrong-size image, missing or malformed calibration, NaN or singular homography or registration record) is
+masked there; a frame whose ground truth, inputs or model step raises, or that the folder has only in part,
+is not scored. Both are printed with their reasons and listed in ``metrics.json`` (``failures``: counts, then
+each frame and view); the metrics are over the scored frames.
 """
 
 import json
@@ -57,14 +63,22 @@ def run(args) -> int:
     unknown = set(args.drop_views) - set(probe.views)
     if unknown:
         raise ValueError(f'--drop-views: unknown views {sorted(unknown)}; views are {probe.views}')
-    frames = probe.frames if not args.frames else [f for f in probe.frames if args.frames[0] <= f <= args.frames[1]]
+    in_range = (lambda f: True) if not args.frames else (lambda f: args.frames[0] <= f <= args.frames[1])
+    frames = [f for f in probe.frames if in_range(f)]
     if not frames:
         raise ValueError(f'no frames of {args.dataset} in {args.frames}')
     views = [v for v in probe.views if v not in args.drop_views]
     data = BevFrames(args.dataset, settings, frames, args.calibration, views, cache_images=False,
                      calibration_dir=args.calibration_dir)
     result = evaluate(model, data, settings_from_namespace(TrackerSettings, args))
+    # frames the folder has files of but not every view's image and calibration: failed too, not dropped silently
+    result.failed_frames.update({f: f'dataset: {why}' for f, why in probe.dataset.incomplete_frames.items()
+                                 if in_range(f)})
+    if not result.outputs:
+        raise ValueError(f'no frame could be evaluated:\n{result.failures_text()}')
     print(format_metrics(result.detection, result.tracking))
+    if result.failures_text():
+        print(result.failures_text())
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     write_bev_points(out / 'detections.txt', result.detections)
@@ -75,14 +89,16 @@ def run(args) -> int:
                                                   'tracking': result.tracking.as_dict(),
                                                   'image_plane': image_plane.as_dict(),
                                                   'calibration': args.calibration, 'views': views,
-                                                  'calibration_dir': args.calibration_dir}, indent=2))
+                                                  'calibration_dir': args.calibration_dir,
+                                                  'failures': result.failures_dict()}, indent=2))
     step = max(len(result.outputs) // max(args.heatmaps, 1), 1)
     for o in result.outputs[::step][:args.heatmaps]:
         gt = result.gt.xy[result.gt.frames == o.frame]
         save_heatmap_png(out / f'heatmap_{o.frame:04d}.png', o.heatmap, data.grid, gt, o.detections.xy,
                          f'frame {o.frame}: heatmap, ground truth (o), detections (x)')
     save_trajectories_png(out / 'trajectories.png', result.gt, result.tracks, data.grid,
-                          f'{Path(args.dataset).name}, frames {frames[0]}-{frames[-1]}')
+                          f'{Path(args.dataset).name}, frames {frames[0]}-{frames[-1]}'
+                          + (f' ({len(result.failed_frames)} failed)' if result.failed_frames else ''))
     print(f'wrote {out}/: metrics.json, detections.txt, tracks.txt, boxes_2d.txt, trajectories.png, '
           f'heatmap_*.png, boxes_2d_*.png')
     return 0
@@ -93,12 +109,26 @@ def _image_plane(args, data, result, views, out):
     from matrix_core.evaluation.image_plane import draw_frame_png, homography_cameras, score_image_plane
     from matrix_core.metrics.image_boxes import format_view_table, write_mot_boxes
 
-    scores = score_image_plane(data.dataset, result.track_detections, homography_cameras(data.dataset, data.homography_of),
-                               views, data.frames, settings_from_namespace(ImageBoxSettings, args), args.iou)
+    camera_of = homography_cameras(data.dataset, data.homography_of)
+    scored = result.scored_frames
+    scores = score_image_plane(data.dataset, result.track_detections, _or_none(camera_of), views, scored,
+                               settings_from_namespace(ImageBoxSettings, args), args.iou)
     print(f'image plane (2D boxes of the tracks in every drone, IoU >= {args.iou:g}):')
     print(format_view_table(scores.metrics))
     write_mot_boxes(out / 'boxes_2d.txt', scores.pred)
-    frame = data.frames[len(data.frames) // 2]
-    draw_frame_png(out / f'boxes_2d_{frame:04d}.png', {v: data.dataset.load_image(v, frame) for v in views},
-                   scores.pred, scores.gt, frame, f'frame {frame}: tracks (id, colour) and annotated boxes (white)')
+    frame = scored[len(scored) // 2]
+    images = {v: image for v in views if (image := _or_none(data.dataset.load_image)(v, frame)) is not None}
+    draw_frame_png(out / f'boxes_2d_{frame:04d}.png', images, scores.pred, scores.gt, frame,
+                   f'frame {frame}: tracks (id, colour) and annotated boxes (white)')
     return scores
+
+
+def _or_none(fn):
+    """``fn(view, frame)``, None where it raises: a view whose camera or image is broken in a frame has no
+    boxes or tile there (``evaluate`` already masked and reported it)."""
+    def call(view, frame):
+        try:
+            return fn(view, frame)
+        except Exception:
+            return None
+    return call

@@ -13,8 +13,40 @@ SUBCOMMANDS = ('info', 'bag', 'track', 'score', 'register', 'train', 'evaluate',
                'evaluate-recording', 'experiments')
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse that names the closest flag of the subcommand for each flag it does not know."""
+
+    def error(self, message):
+        if message.startswith('unrecognized arguments:'):
+            import difflib
+
+            flags = [o for a in self._subcommand_actions() for o in a.option_strings if o.startswith('--')]
+            for word in message.split(':', 1)[1].split():
+                close = difflib.get_close_matches(word.split('=')[0], flags, 1) if word.startswith('-') else []
+                if close:
+                    message += f'; {word}: did you mean {close[0]}?'
+            message += ' (--help lists them)'
+        super().error(message)
+
+    def _subcommand_actions(self):
+        """The actions of the subcommand being parsed (this parser's own when it has none)."""
+        argv = sys.argv[1:] if self._argv is None else self._argv
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for word in argv:
+                    if word in action.choices:
+                        return action.choices[word]._actions
+        return self._actions
+
+    _argv = None
+
+    def parse_args(self, args=None, namespace=None):
+        self._argv = None if args is None else list(args)
+        return super().parse_args(args, namespace)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog='matrix-tracker',
         description='Multi-drone multi-view pedestrian detection and tracking: offline tools.')
     sub = parser.add_subparsers(dest='command', metavar='COMMAND', required=True)

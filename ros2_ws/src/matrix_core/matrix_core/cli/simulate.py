@@ -12,10 +12,15 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    from matrix_core.sim.sequence import simulate
+    import json
+
+    from matrix_core.sim.sequence import SUMMARY_FILE, simulate
 
     settings = settings_from_namespace(SimulateSettings, args)
     out = simulate(settings)
-    print(f'wrote {settings.frames} frames of {settings.config} (seed {settings.seed}, '
-          f'{settings.width}x{settings.height}) to {out}')
+    summary = json.loads((out / SUMMARY_FILE).read_text())
+    print(f'wrote {summary["frames_written"]} of {settings.frames} frames of {settings.config} (seed {settings.seed}, '
+          f'{settings.width}x{settings.height}) to {out}; {summary["frames_failed"]} failed')
+    for f in summary['failed_frames']:
+        print(f'  frame {f["frame"]}: {f["reason"]}')
     return 0

@@ -103,6 +103,11 @@ class MultiviewDataset(ABC):
         """(x_min, y_min, x_max, y_max) of the walkable area in world metres."""
 
     @property
+    def incomplete_frames(self) -> dict:
+        """frame -> why a frame some view has files of is not in :attr:`frames` (readers that can tell)."""
+        return {}
+
+    @property
     def annotated_frames(self) -> tuple:
         """Frame numbers that have an annotation file."""
         return ()

@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from matrix_core.datasets import matrix_conventions as conv
-from matrix_core.datasets.base import MultiviewDataset, find_image, image_size, numbered_stems, read_image
+from matrix_core.datasets.base import (IMAGE_EXTENSIONS, MultiviewDataset, find_image, image_size, numbered_stems,
+                                      read_image)
 from matrix_core.datasets.opencv_xml import read_matrices
 from matrix_core.datasets.types import BoundingBox, DatasetError, PersonAnnotation, PlaneCorrespondences
 from matrix_core.geometry.camera import Camera
@@ -45,7 +46,12 @@ class MatrixDataset(MultiviewDataset):
             if not (self.root / sub).is_dir():
                 raise DatasetError(f'{self.root} is not a MATRIX folder: missing {sub}/')
         meta_path = self.root / META_FILE
-        self.meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
+        try:
+            self.meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
+        except ValueError as exc:
+            raise DatasetError(f'malformed {meta_path}: {exc}') from None
+        if not isinstance(self.meta, dict):
+            raise DatasetError(f'malformed {meta_path}: expected a JSON object')
 
     # ----- structure -------------------------------------------------------------------------------
     @cached_property
@@ -66,14 +72,42 @@ class MatrixDataset(MultiviewDataset):
             raise DatasetError(f'{self.root}/image_subsets has no D1..DN folders')
         return tuple(conv.view_name(d) for d in drones)
 
+    def _image_frames(self, view: str) -> set:
+        """Frames of the images of ``view``; :class:`DatasetError` naming a file numbered otherwise than
+        ``TTTT`` (4 digits, zero-padded: the name every reader of the format looks up)."""
+        folder = self.root / 'image_subsets' / view
+        frames = numbered_stems(folder)
+        misnamed = sorted(p.name for p in folder.iterdir() if p.stem.isdigit() and p.stem != f'{int(p.stem):04d}'
+                          and p.suffix.lower() in IMAGE_EXTENSIONS)
+        if misnamed:
+            raise DatasetError(f'{folder}: image files must be named by their frame as TTTT (e.g. 0012.png); '
+                               f'misnamed: {", ".join(misnamed[:5])}')
+        return set(frames)
+
     @cached_property
     def frames(self) -> tuple:
         common = None
         for view in self.views:
             d = conv.drone_number(view)
-            have = set(numbered_stems(self.root / 'image_subsets' / view)) & self._calibrated.get(d, set())
+            have = self._image_frames(view) & self._calibrated.get(d, set())
             common = have if common is None else common & have
         return tuple(sorted(common or ()))
+
+    @cached_property
+    def incomplete_frames(self) -> dict:
+        """frame -> why it is not in :attr:`frames`: frames some view has an image or calibration of, but not
+        every view both (named per view), so that a command can report them instead of dropping them silently."""
+        have = {}
+        for view in self.views:
+            images = self._image_frames(view)
+            calibrated = self._calibrated.get(conv.drone_number(view), set())
+            have[view] = (images, calibrated)
+        out = {}
+        for frame in sorted(set().union(*(a | b for a, b in have.values())) - set(self.frames)):
+            lacking = [f'{v} {"/".join(w for w, s in (("image", a), ("calibration", b)) if frame not in s)}'
+                       for v, (a, b) in have.items() if frame not in a or frame not in b]
+            out[frame] = 'no ' + ', '.join(lacking)
+        return out
 
     @cached_property
     def annotated_frames(self) -> tuple:

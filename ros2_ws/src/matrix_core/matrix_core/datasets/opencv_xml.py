@@ -18,7 +18,11 @@ def read_matrices(path: Path, names, optional=()) -> dict:
     path = Path(path)
     if not path.is_file():
         raise DatasetError(f'calibration file not found: {path}')
-    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+    try:
+        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+    except (cv2.error, SystemError) as exc:  # truncated or malformed XML: OpenCV's parser raises in the constructor
+        why = str(exc.__cause__ or exc).strip().split('error: ')[-1]   # cv2.error wrapped in a SystemError
+        raise DatasetError(f'cannot parse calibration file {path}: {why}') from None
     try:
         if not fs.isOpened():
             raise DatasetError(f'cannot parse calibration file: {path}')

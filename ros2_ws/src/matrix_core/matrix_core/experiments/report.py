@@ -335,6 +335,14 @@ class Report:
         if bad:
             self.add('## Steps that did not run', 'Their rows above read n/a.',
                      '\n'.join(f'- `{k}`: **{v["state"]}**: {v.get("reason", "")}' for k, v in sorted(bad.items())))
+        partial = [r for r in self.records if r.get('failures', {}).get('frames_failed')
+                   or r.get('failures', {}).get('views_masked')]
+        if partial:
+            self.add('## Evaluations with failed frames or masked views',
+                     'Failed frames are not scored; the reasons are in each step\'s metrics.json (`failures`).',
+                     '\n'.join(f'- {r["model"]} on {r["test"]} ({r["calibration"]}, views {r["views_used"]}): '
+                               f'{r["failures"]["frames_failed"]} of {r["num_frames"]} frames failed, '
+                               f'{r["failures"]["views_masked"]} views masked' for r in partial))
 
     def differences(self) -> None:
         self.add('## How our setup differs from the paper (read before comparing numbers)', '\n'.join([

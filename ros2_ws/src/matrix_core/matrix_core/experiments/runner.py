@@ -4,8 +4,10 @@ A step writes into ``<run>/<name>/``; its params go to ``<run>/steps/<name>.star
 ``.done.json`` (with the wall time) after. A step started with other params, or unfinished, is redone
 from an empty folder - except an unfinished training, which resumes from its ``last.pt``. A step that
 fails is logged (``<name>.error.txt``) and the steps that need it are skipped; the run goes on, and
-``run.json`` lists every step's state for the report. With ``jobs`` > 1, steps whose needs are finished
-run at once in that many worker processes (one torch thread each, in plan order).
+``run.json`` lists every step's state for the report (rewritten after each step, so a run killed midway
+says how far it got). With ``jobs`` > 1, steps whose needs are finished run at once in that many worker
+processes (one torch thread each, in plan order). Inside an evaluation step, a frame that fails is not scored
+and a view whose image or calibration fails is masked; its ``metrics.json`` lists them (``failures``).
 """
 
 import dataclasses
@@ -96,7 +98,7 @@ def _in_worker(step, run_dir: Path, threads: int) -> dict:
     return run_step(step, run_dir, False, print)
 
 
-def _run_parallel(plan: list, run_dir: Path, threads: int, jobs: int, bar, states: dict) -> None:
+def _run_parallel(plan: list, run_dir: Path, threads: int, jobs: int, bar, states: dict, step_done) -> None:
     """Run ``plan`` with ``jobs`` steps at once (spawned workers: no forked torch state), in plan order."""
     planned, pending, running = {s.name for s in plan}, list(plan), {}
     with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context('spawn')) as pool:
@@ -111,6 +113,7 @@ def _run_parallel(plan: list, run_dir: Path, threads: int, jobs: int, bar, state
                 if blocked:
                     states[step.name] = {'state': SKIPPED, 'reason': f'needs {blocked[0]}, which was {blocked[1]}'}
                     bar.update()
+                    step_done()
                     continue
                 running[pool.submit(_in_worker, step, run_dir, threads)] = step
             if not running:
@@ -125,6 +128,7 @@ def _run_parallel(plan: list, run_dir: Path, threads: int, jobs: int, bar, state
                 states[step.name] = {'kind': step.kind, **result}
                 bar.set_postfix_str(step.name)
                 bar.update()
+                step_done()
 
 
 def run_plan(plan: list, size, run_dir, threads: int = 1, progress: bool = True, log=print, repo=None,
@@ -137,11 +141,20 @@ def run_plan(plan: list, size, run_dir, threads: int = 1, progress: bool = True,
     torch.set_num_threads(threads)
     started = time.time()
     states = {}
+    summary = {'size': {**dataclasses.asdict(size), 'transfer_fraction': size.transfer_fraction,
+                        'transfer_frames': size.transfer_frames},
+               'machine': {**machine_info(threads, Path(repo or Path.cwd())), 'jobs': jobs},
+               'started_utc': time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime(started)),
+               'wall_s': 0.0, 'steps': states}
+
+    def step_done() -> None:  # after every step: a run killed midway still says how far it got
+        _write_run(run_dir, summary, started)
+
     if jobs > 1:
         with tqdm(total=len(plan), desc=f'experiments ({size.name}, {jobs} jobs)', unit='step',
                   disable=not progress) as bar:
-            _run_parallel(plan, run_dir, threads, jobs, bar, states)
-        states = {s.name: states[s.name] for s in plan}
+            _run_parallel(plan, run_dir, threads, jobs, bar, states, step_done)
+        summary['steps'] = {s.name: states[s.name] for s in plan}
     else:
         bar = tqdm(plan, desc=f'experiments ({size.name})', unit='step', disable=not progress)
         planned = {s.name for s in plan}
@@ -151,15 +164,19 @@ def run_plan(plan: list, size, run_dir, threads: int = 1, progress: bool = True,
             if blocked:
                 states[step.name] = {'state': SKIPPED, 'reason': f'needs {blocked[0]}, which was '
                                      f'{"not run" if blocked[1] == "wait" else blocked[1]}'}
-                continue
-            states[step.name] = {'kind': step.kind, **run_step(step, run_dir, progress, log)}
-    summary = {'size': {**dataclasses.asdict(size), 'transfer_fraction': size.transfer_fraction,
-                        'transfer_frames': size.transfer_frames},
-               'machine': {**machine_info(threads, Path(repo or Path.cwd())), 'jobs': jobs},
-               'started_utc': time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime(started)),
-               'wall_s': time.time() - started, 'steps': states}
-    (run_dir / RUN_FILE).write_text(json.dumps(summary, indent=2))
+            else:
+                states[step.name] = {'kind': step.kind, **run_step(step, run_dir, progress, log)}
+            step_done()
+    _write_run(run_dir, summary, started)
     return summary
+
+
+def _write_run(run_dir: Path, summary: dict, started: float) -> None:
+    """``run.json`` (the steps so far), replaced atomically so a kill never leaves half a file."""
+    summary['wall_s'] = time.time() - started
+    tmp = run_dir / (RUN_FILE + '.tmp')
+    tmp.write_text(json.dumps(summary, indent=2))
+    tmp.replace(run_dir / RUN_FILE)
 
 
 def run_experiments(size, out_dir, report, images=None, threads: int = 1, progress: bool = True, log=print,

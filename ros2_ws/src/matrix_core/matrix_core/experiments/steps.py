@@ -135,7 +135,8 @@ def run_evaluate(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None
     train_params = json.loads((run_dir / 'steps' / (str(Path(p['checkpoint']).parent) + '.started.json')).read_text())
     record = {**p, 'trained': train_params, 'views_used': list(p['views'] or data.views),
               'detection': result.detection.as_dict(), 'tracking': result.tracking.as_dict(),
-              'num_frames': len(data.frames), 'eval_s': time.perf_counter() - start}
+              'num_frames': len(data.frames), 'eval_s': time.perf_counter() - start,
+              'failures': result.failures_dict()}
     out.mkdir(parents=True, exist_ok=True)
     (out / 'metrics.json').write_text(json.dumps(record, indent=2))
     if p['plot']:

@@ -6,7 +6,8 @@ only subscribes and hands the messages over. Geometry:
 
 - ``matrix_msgs/HomographyStamped`` (from ``register``): its :class:`Registration`; a view is missing when
   the registration failed or is unusable, or its confidence is below ``min_confidence``;
-- ``sensor_msgs/CameraInfo`` (``p = K [R | t]``, from ``calib`` or a bag's ground truth): its camera.
+- ``sensor_msgs/CameraInfo`` (``p = K [R | t]``, from ``calib`` or a bag's ground truth): its camera; an
+  image of another size than the CameraInfo's makes the view missing.
 """
 
 from matrix_core.fusion.views import ViewInput, ViewInputError, at_reduced_resolution, jpeg_reduction
@@ -47,15 +48,20 @@ class ViewInputs:
         if image_msg is None or geometry_msg is None:
             return ViewInput(reason='no ' + ' and no '.join(
                 p for p, x in (('image', image_msg), (geometry_name, geometry_msg)) if x is None))
-        confidence = None
+        confidence, camera_size = None, None
         try:
             if hasattr(geometry_msg, 'h_img_to_ground'):
                 registration = registration_from_msg(geometry_msg)
                 confidence = float(registration.confidence)
                 img_H_ground = registration_ground(registration, self.min_confidence)
             else:
-                img_H_ground = camera_from_camera_info(geometry_msg).img_H_ground()
+                camera = camera_from_camera_info(geometry_msg)
+                img_H_ground, camera_size = camera.img_H_ground(), (camera.width, camera.height)
             image, img_H_ground = self._decode(view, image_msg, img_H_ground)
+            if camera_size is not None and self.full_size[view] != camera_size:
+                # its homography is for other pixels: lifting would put the features in the wrong cells
+                raise ViewInputError('image is {}x{}, its camera_info is for {}x{}'.format(*self.full_size[view],
+                                                                                          *camera_size))
         except (ViewInputError, ConversionError) as exc:
             return ViewInput(reason=str(exc), confidence=confidence)
         return ViewInput(image, img_H_ground, confidence=confidence)

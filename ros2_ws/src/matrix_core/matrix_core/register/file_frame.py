@@ -19,6 +19,9 @@ from matrix_core.datasets import matrix_conventions as conv
 from matrix_core.register.registration import STATUS_OK, Registration, RegistrationError, check_homography
 
 
+BROKEN_RECORD = ('unusable record', 'unreadable record')  # how a record file that cannot be used is reported
+
+
 def record_name(view: str, frame: int) -> str:
     """File name of the record of drone ``view`` ('D3') and ``frame`` in ``DIR/registration/``:
     'Drone3_0017.json'."""
@@ -67,7 +70,7 @@ def registration_from_record(record: dict, where: str = 'record') -> Registratio
         pix = _affine_of(conv.pixels_to_file)
         ref = np.linalg.inv(pix) @ check_homography(record.get('H_cur_to_ref'), f'{where}: H_cur_to_ref') @ pix
     except (RegistrationError, TypeError) as exc:
-        return Registration.failed(f'unusable record: {exc}', **values)
+        return Registration.failed(f'{BROKEN_RECORD[0]}: {exc}', **values)
     return Registration(STATUS_OK, _normalised(ref), _normalised(ground), message=record.get('message', ''), **values)
 
 
@@ -80,10 +83,10 @@ def read_registration(folder, view: str, frame: int):
     try:
         record = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, ValueError) as exc:
-        return Registration.failed(f'{path}: unreadable record: {exc}')
+        return Registration.failed(f'{path}: {BROKEN_RECORD[1]}: {exc}')
     if not isinstance(record, dict):
-        return Registration.failed(f'{path}: unreadable record: not a JSON object')
+        return Registration.failed(f'{path}: {BROKEN_RECORD[1]}: not a JSON object')
     try:
         return registration_from_record(record, str(path))
     except (TypeError, ValueError) as exc:   # e.g. a number field holding text
-        return Registration.failed(f'{path}: unreadable record: {exc}')
+        return Registration.failed(f'{path}: {BROKEN_RECORD[1]}: {exc}')

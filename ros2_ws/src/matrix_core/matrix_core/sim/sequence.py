@@ -7,6 +7,11 @@ convention:
 ``sim_ground_truth/TTTT.json`` (per view: ``img_H_ground``, ``world_T_cam``, camera centre, drone position
 and velocity) and, with ``bag``, ``bag/`` (rosbag2 MCAP, topics in :mod:`matrix_core.bags`).
 
+No frame ends the run: a frame whose step, rendering or writing raises is left out (its files deleted, so no
+reader sees half a frame; the bag holds only whole frames) and the sequence goes on, one time step further.
+``simulate_summary.json`` says how many frames were written and which failed, and why; the bag is closed on
+any exit (an error, Ctrl-C), so every frame written before stays readable.
+
 Checkerboard inner corners are the markers of ``matchings/Planes/3d.txt`` (ids in
 :data:`~matrix_core.sim.scene.BOARD_MARKER_BASE`); each frame's ``CameraN_2d`` lists those inside the image
 and not hidden by a box (people may stand on them).
@@ -151,15 +156,49 @@ def simulate(settings, progress: bool = True) -> Path:
     bag = SequenceBagWriter(out / 'bag', sim.views, settings.compressed, clock) if settings.bag else None
     if bag is not None:
         bag.__enter__()
+    failed, written, stopped = {}, [], 'interrupted'
     try:
         for frame in tqdm(range(settings.frames), desc=f'simulate {config.name}', unit='frame',
                           disable=not progress):
-            if frame > 0:
-                sim.step(settings.frame_period)
-            data = write_frame(sim, writer, frame, out)
-            if bag is not None:
-                bag.write_frame(frame, data['images'], data['cameras'], data['positions'])
+            try:
+                if frame > 0:
+                    sim.step(settings.frame_period)
+                data = write_frame(sim, writer, frame, out)
+                if bag is not None:
+                    bag.write_frame(frame, data['images'], data['cameras'], data['positions'])
+                written.append(frame)
+            except Exception as exc:  # one frame's failure: that frame is left out, the sequence goes on
+                failed[frame] = f'{type(exc).__name__}: {exc}'
+                remove_frame_files(out, frame)
+                tqdm.write(f'simulate: frame {frame} failed: {failed[frame]}')
+        stopped = ''
     finally:
         if bag is not None:
-            bag.__exit__(None, None, None)
+            bag.__exit__(None, None, None)   # closed on any exit: the frames written stay readable
+        write_summary(out, settings.frames, written, failed, stopped)
     return out
+
+
+SUMMARY_FILE = 'simulate_summary.json'
+
+
+def write_summary(out: Path, requested: int, written: list, failed: dict, stopped: str = '') -> dict:
+    """``OUT/simulate_summary.json``: frames requested and written, each failed frame with its reason, and
+    ``stopped`` ('interrupted' when the run ended before its last frame)."""
+    summary = {'frames_requested': requested, 'frames_written': len(written), 'frames_failed': len(failed),
+               'failed_frames': [{'frame': f, 'reason': r} for f, r in sorted(failed.items())],
+               'stopped': stopped, 'last_frame_written': written[-1] if written else None}
+    (out / SUMMARY_FILE).write_text(json.dumps(summary, indent=1) + '\n')
+    return summary
+
+
+def remove_frame_files(out: Path, frame: int) -> None:
+    """Delete what a failed frame had written of itself (files named ``TTTT.*`` or ``*_TTTT.*`` outside
+    ``reference/`` and ``bag/``), so that no reader takes a half-written frame (images of some drones,
+    annotations missing) for a whole one."""
+    tag = f'{frame:04d}'
+    for path in out.rglob('*'):
+        rel = path.relative_to(out).parts
+        if path.is_file() and rel[0] not in ('reference', 'bag') and \
+                (path.stem == tag or path.stem.endswith('_' + tag)):
+            path.unlink()

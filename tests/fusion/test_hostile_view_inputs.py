@@ -1,0 +1,102 @@
+"""Hostile inputs of one view of a live frame (issue 17), as the fuse node hands them to
+``fusion.view_inputs``: images of the wrong size, encoding or zero bytes; NaN, Inf, singular and absurdly
+scaled homographies and CameraInfo. Each bad one makes that view missing with its reason (the node logs it
+and publishes it in /diagnostics, tests/system/test_fuse_faults.py); an absurd scale of a homography, which
+means nothing for a homography, changes nothing."""
+
+import numpy as np
+import pytest
+from sensor_msgs.msg import CompressedImage, Image
+
+from matrix_core.datasets import MatrixDataset
+from matrix_core.fusion.view_inputs import ViewInputs
+from matrix_core.register.registration import Registration
+from matrix_ros.conversions import (camera_to_camera_info, image_to_compressed, image_to_msg,
+                                    registration_to_msg)
+
+
+@pytest.fixture(scope='module')
+def real(matrix_sample):
+    ds = MatrixDataset(matrix_sample)
+    camera, image = ds.camera('D1', 0), ds.load_image('D1', 0)
+    return camera, image
+
+
+def _inputs():
+    return ViewInputs((480, 272), min_confidence=0.3, reduced_decode=True)
+
+
+def _homography(camera, scale=1.0, values=None):
+    msg = registration_to_msg(Registration('ok', np.eye(3), np.linalg.inv(camera.img_H_ground()), confidence=0.9))
+    h = np.array(msg.h_img_to_ground) * scale if values is None else np.asarray(values, float).ravel()
+    msg.h_img_to_ground = h.tolist()
+    return msg
+
+
+def _camera_info(camera, **changes):
+    msg = camera_to_camera_info(camera)
+    for k, v in changes.items():
+        setattr(msg, k, v)
+    return msg
+
+
+def test_good_view_is_usable(real):
+    camera, image = real
+    for geometry, kind in ((_homography(camera), 'homography'), (_camera_info(camera), 'camera_info')):
+        view = _inputs().view_input('D1', image_to_compressed(image), geometry, kind)
+        assert view.usable, view.reason
+
+
+@pytest.mark.parametrize('make, reason', [
+    (lambda img: image_to_compressed(img[::3, ::3].copy()), 'image is 640x360, its camera_info is for 1920x1080'),
+    (lambda img: image_to_msg(img[:540, :960].copy()), 'image is 960x540, its camera_info is for 1920x1080'),
+    (lambda img: CompressedImage(format='jpeg'), 'empty'),
+    (lambda img: CompressedImage(format='jpeg', data=b'\xff\xd8 not a jpeg'), 'corrupt'),
+    (lambda img: Image(height=4, width=4, encoding='yuv422_weird', step=8, data=bytes(32)), 'unsupported image encoding'),
+    (lambda img: Image(height=4, width=4, encoding='bgr8', step=12, data=bytes(0)), 'too short'),
+], ids=['wrong size jpeg', 'wrong size raw', 'zero bytes', 'corrupt jpeg', 'encoding', 'truncated raw'])
+def test_bad_images_make_the_view_missing(real, make, reason):
+    camera, image = real
+    view = _inputs().view_input('D1', make(image), _camera_info(camera), 'camera_info')
+    assert not view.usable and reason in view.reason, view.reason
+
+
+@pytest.mark.parametrize('values, reason', [
+    (np.full(9, np.nan), 'NaN'), (np.r_[np.inf, np.ones(8)], 'NaN/infinite'),
+    (np.zeros(9), 'singular'), ([1, 2, 3, 2, 4, 6, 0, 0, 1], 'singular'), (np.ones(4), '9 values'),
+], ids=['nan', 'inf', 'zeros', 'rank 2', 'wrong length'])
+def test_bad_homographies_make_the_view_missing(real, values, reason):
+    camera, image = real
+    view = _inputs().view_input('D1', image_to_compressed(image), _homography(camera, values=values), 'homography')
+    assert not view.usable and reason in view.reason, view.reason
+
+
+@pytest.mark.parametrize('scale', [1e-12, -1.0, 1e12])
+def test_a_homography_at_any_scale_is_the_same_homography(real, scale):
+    camera, image = real
+    good = _inputs().view_input('D1', image_to_compressed(image), _homography(camera), 'homography')
+    scaled = _inputs().view_input('D1', image_to_compressed(image), _homography(camera, scale), 'homography')
+    assert scaled.usable, scaled.reason
+    norm = lambda H: H / H[2, 2]
+    np.testing.assert_allclose(norm(scaled.img_H_ground), norm(good.img_H_ground), rtol=1e-9)
+
+
+@pytest.mark.parametrize('changes, reason', [
+    ({'p': [float('nan')] * 12}, 'NaN'),
+    ({'p': [float('inf')] + [0.0] * 11}, 'NaN'),
+    ({'k': [0.0] * 9}, 'singular'),
+    ({'width': 0, 'height': 0}, 'empty'),
+], ids=['nan p', 'inf p', 'singular k', 'no size'])
+def test_bad_camera_info_makes_the_view_missing(real, changes, reason):
+    camera, image = real
+    view = _inputs().view_input('D1', image_to_compressed(image), _camera_info(camera, **changes), 'camera_info')
+    assert not view.usable and reason.lower() in view.reason.lower(), view.reason
+
+
+def test_an_absurdly_scaled_camera_info_is_refused(real):
+    """``p`` scaled by 1e6 is no longer ``K [R | t]`` with a rotation: refused, not reinterpreted."""
+    camera, image = real
+    msg = _camera_info(camera)
+    msg = _camera_info(camera, p=[1e6 * v for v in msg.p])
+    view = _inputs().view_input('D1', image_to_compressed(image), msg, 'camera_info')
+    assert not view.usable and 'rotation' in view.reason, view.reason
