@@ -93,7 +93,12 @@ def test_pnp_on_true_and_detected_board_corners_recovers_pose():
     """Full resolution: PnP on exact corners is exact; on corners OpenCV detects in the render it is within
     0.1 deg / 3 cm for boards detected with at least 100 corners."""
     cv2.setNumThreads(1)
-    sim = Simulation(load_scene_config('complex'), seed=3, width=1920, height=1080)
+    # The renderer's geometry on the variant's own floor in daylight: the randomised looks (dusk-dimmed
+    # boards on random floors) are covered by the calibration tests on simulated sequences.
+    config = load_scene_config('complex')
+    config.lighting.enabled = False
+    config.distractors.ground_variety = False
+    sim = Simulation(config, seed=3, width=1920, height=1080)
     results = []
     for k in range(len(sim.views)):
         cam = sim.camera(k)
