@@ -37,7 +37,6 @@ from matrix_ros.conversions import stamp_to_seconds
 from matrix_ros.qos import qos_by_name
 
 ROOT = Path(__file__).resolve().parent.parent
-CHECKPOINT = ROOT / 'ros2_ws/src/matrix_core/matrix_core/bev/checkpoints/complex.pt'
 
 
 def simulated_sequence(out: Path, frames: int, seed: int = 11) -> tuple:
@@ -77,14 +76,14 @@ def main() -> int:
     p.add_argument('--dataset', help='its MATRIX folder (references, calibration prior)')
     p.add_argument('--frames', type=int, default=16, help='frames of the default simulated sequence')
     p.add_argument('--drones_per_process', type=int, default=1, help='1 = one calib and one register process per drone')
-    p.add_argument('--checkpoint', help='BEV checkpoint (default: complex.pt for simulated data, else the node default)')
+    p.add_argument('--checkpoint', help='BEV checkpoint (default: the fuse node default, the shipped detector)')
     p.add_argument('--out', default=str(ROOT / 'out/bench_graph'))
     args = p.parse_args()
     out = Path(args.out)
     if bool(args.bag) != bool(args.dataset):
         p.error('--bag and --dataset go together')
     bag, dataset = (Path(args.bag), Path(args.dataset)) if args.bag else simulated_sequence(out / 'sim', args.frames)
-    checkpoint = args.checkpoint or (str(CHECKPOINT) if not args.bag else '')
+    checkpoint = args.checkpoint or ''
     run = out / 'run'
     shutil.rmtree(run, ignore_errors=True)
     settings = GraphSettings(bag=str(bag), dataset=str(dataset), drones_per_process=args.drones_per_process,

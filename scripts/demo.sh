@@ -14,7 +14,7 @@ cd "$(dirname "$0")/.."
 SAMPLE=${SAMPLE:-$MATRIX_SHARED/matrix_sample}
 OUT=${OUT:-out/demo}
 FRAMES=${DEMO_FRAMES:-12}
-CHECKPOINTS=ros2_ws/src/matrix_core/matrix_core/bev/checkpoints
+DEFAULT_CHECKPOINT=$(python -c "from matrix_core.fusion.settings import shipped_checkpoint; print(shipped_checkpoint())")
 RUN_GRAPH=ros2_ws/install/matrix_bringup/lib/matrix_bringup/run_graph   # where there is no ros2 command
 [ -d "$SAMPLE" ] || { echo "demo: MATRIX sample not found at $SAMPLE (set SAMPLE=...)" >&2; exit 1; }
 mkdir -p "$OUT"
@@ -64,12 +64,12 @@ SIM=$OUT/sim
 rm -rf "$SIM"
 matrix-tracker simulate --config complex --frames "$FRAMES" --seed 7 --image_ext .jpg --bag --compressed --out "$SIM"
 matrix-tracker info "$SIM" | grep -E "^(format|views|frames|people|camera_height_m)"
-# complex.pt: trained on simulated sequences (it does not transfer to real images; complex_quick.pt does)
-live_graph simulated "$SIM/bag" "$SIM" checkpoint:="$CHECKPOINTS/complex.pt"
+# the same default checkpoint as on the real sample (README "The detector")
+live_graph simulated "$SIM/bag" "$SIM"
 
 echo "== simulated: the same checkpoint offline on the same frames, with the registration homographies"
 matrix-tracker register "$SIM" --out "$OUT/simulated/offline_registration" > "$OUT/simulated/offline_register.log" 2>&1
-matrix-tracker evaluate "$SIM" --checkpoint "$CHECKPOINTS/complex.pt" --calibration registration \
+matrix-tracker evaluate "$SIM" --checkpoint "$DEFAULT_CHECKPOINT" --calibration registration \
   --calibration-dir "$OUT/simulated/offline_registration" --out "$OUT/simulated/offline" --heatmaps 2
 python - "$OUT/simulated" <<'EOF'
 import json, sys

@@ -1,4 +1,4 @@
-"""Issue 6 acceptance: the shipped ``complex.pt`` on a freshly simulated, held-out complex sequence (a seed
+"""Issue 6 acceptance: the shipped default detector on a freshly simulated, held-out complex sequence (a seed
 no training or validation sequence used; moving drones; per-frame ground-truth calibration).
 
 Thresholds of the issue: MODA >= 85 %, MOTA >= 80 %, IDF1 >= 75 %, MT >= 70 % of the people, and removing
@@ -6,19 +6,17 @@ Thresholds of the issue: MODA >= 85 %, MOTA >= 80 %, IDF1 >= 75 %, MT >= 70 % of
 baseline) is only reported. A model that misses a threshold fails here with its numbers.
 """
 
-from pathlib import Path
-
 import pytest
 import torch
 
-import matrix_core.bev
 from matrix_core.bev.checkpoint import load_model
 from matrix_core.bev.data import BevFrames
 from matrix_core.bev.evaluation import evaluate
 from matrix_core.cli.main import main
+from matrix_core.fusion.settings import shipped_checkpoint
 
-CHECKPOINT = Path(matrix_core.bev.__file__).parent / 'checkpoints' / 'complex.pt'
-SEED = 31            # training used 21, 22; validation 23; the held-out evaluation in configs/complex.yaml 24
+CHECKPOINT = shipped_checkpoint()
+SEED = 31            # configs/detector.yaml trains on 101-103, validates on 111-112, tests on 201-202
 FRAMES = 30
 DROPPED = ('D2', 'D6')
 

@@ -3,18 +3,17 @@ ground truth, and views without a result (PnP failed, registration failed) are m
 
 import csv
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-import matrix_core.bev
 from matrix_core.bev.calibration_sources import calibration_source
 from matrix_core.bev.data import BevFrames
 from matrix_core.bev.settings import BevSettings
 from matrix_core.calib.scene import default_config_path
 from matrix_core.cli.main import main
 from matrix_core.datasets import open_dataset
+from matrix_core.fusion.settings import shipped_checkpoint
 
 SETTINGS = BevSettings(image_width=160, image_height=96, cell_m=0.5)
 
@@ -109,7 +108,7 @@ def test_registration_source_matches_ground_truth_and_masks_failures(sequence, t
 @pytest.mark.slow
 def test_evaluate_cli_takes_a_calibration_dir(sequence, tmp_path, capsys):
     data, pnp, _ = sequence
-    ckpt = Path(matrix_core.bev.__file__).parent / 'checkpoints' / 'complex_quick.pt'
+    ckpt = shipped_checkpoint()
     assert main(['evaluate', str(data), '--checkpoint', str(ckpt), '--calibration', 'pnp', '--calibration-dir',
                  str(pnp), '--out', str(tmp_path), '--heatmaps', '1']) == 0
     metrics = json.loads((tmp_path / 'metrics.json').read_text())

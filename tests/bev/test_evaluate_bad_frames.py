@@ -11,14 +11,14 @@ import cv2
 import numpy as np
 import pytest
 
-import matrix_core.bev
 from matrix_core.bev.inference import SequenceRunner
 from matrix_core.cli.main import main
 from matrix_core.datasets import open_dataset
+from matrix_core.fusion.settings import shipped_checkpoint
 from matrix_core.register.file_frame import record_name, registration_to_record
 from matrix_core.register.registration import STATUS_OK, Registration
 
-CHECKPOINT = Path(matrix_core.bev.__file__).parent / 'checkpoints' / 'complex_quick.pt'
+CHECKPOINT = shipped_checkpoint()
 pytestmark = pytest.mark.slow
 
 

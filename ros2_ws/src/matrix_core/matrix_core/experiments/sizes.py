@@ -80,7 +80,7 @@ QUICK = ExperimentSize(
     expected_minutes=10,   # 64 steps: 9.7 min wall (4 min CPU) on the 2-core machine under load, 2026-12-02
     notes='tiny sequences, 160x96 input, 0.5 m cells, 5 epochs: a smoke test of the whole pipeline')
 
-# The recipe of the shipped checkpoints/complex.pt (bev/configs/complex.yaml: 500 frames, 480x272 input,
+# The recipe of the former checkpoints/complex.pt (bev/configs/complex.yaml: 500 frames, 480x272 input,
 # 17 epochs, batch 2, cosine lr) for each of the 7 trainings: about 70 min per model on one thread of the
 # machine that trained complex.pt (8 h in all), 9 min per epoch (2.5 h per model, about 18 h in all) on a
 # 2-core AVX2 EPYC (measured 2026-12-01). The plan now trains about 2.8 more (simple_static and the transfer

@@ -11,9 +11,13 @@ INPUT_KINDS = ('homography', 'camera_info')
 IMAGE_KINDS = ('raw', 'compressed', 'both')
 
 
-def shipped_checkpoint(name: str = 'complex_quick.pt') -> Path:
-    """A checkpoint shipped with the package (``matrix_core/bev/checkpoints/``): ``complex_quick.pt``, the
-    default, also works on the real sample; ``complex.pt`` is better on simulated sequences only."""
+# The default detector (README "The detector"): bev/configs/detector.yaml, seed 0, selected on validation.
+DEFAULT_CHECKPOINT = 'detector_seed0.pt'
+
+
+def shipped_checkpoint(name: str = DEFAULT_CHECKPOINT) -> Path:
+    """A checkpoint shipped with the package (``matrix_core/bev/checkpoints/``), by default
+    :data:`DEFAULT_CHECKPOINT`, the one checkpoint of the fuse node, the demo and the experiments' "ours"."""
     return Path(__file__).resolve().parent.parent / 'bev' / 'checkpoints' / name
 
 
@@ -40,7 +44,7 @@ class FuseSettings(TrackerSettings):
     min_confidence: float = field(default=0.0, metadata={
         'help': 'homographies with a lower registration confidence are treated as missing'})
     checkpoint: str = field(default='', metadata={
-        'help': 'BEV model checkpoint (.pt); empty: the shipped matrix_core/bev/checkpoints/complex_quick.pt'})
+        'help': 'BEV model checkpoint (.pt); empty: the shipped default matrix_core/bev/checkpoints/detector_seed0.pt'})
     device: str = field(default='cpu', metadata={'help': 'torch device (the BEV runner decodes on the CPU)'})
     threads: int = field(default=1, metadata={'help': 'torch and OpenCV CPU threads (1: one core, as benchmarked)'})
     area: list[float] = field(default_factory=lambda: list(MATRIX_AREA), metadata={
