@@ -9,6 +9,7 @@ import pytest
 from matrix_core.cli.main import main
 from matrix_core.datasets import MultiviewXDataset, open_dataset
 from matrix_core.datasets.opencv_xml import read_matrices
+from matrix_core.experiments.table3 import foot_point_agreement
 
 
 @pytest.fixture(scope='module')
@@ -19,28 +20,15 @@ def sample(shared_dir):
     return path
 
 
-def _inside(box, width=1920, height=1080) -> bool:
-    """Boxes touching the image border have a cut foot or side: left out, as in the sample's README."""
-    return box.xmin > 0 and box.ymin > 0 and box.xmax < width - 1 and box.ymax < height - 1
-
-
 def test_annotated_positions_project_onto_the_annotated_feet(sample):
     ds = open_dataset(sample)
     assert isinstance(ds, MultiviewXDataset)
     assert ds.views == ('C1', 'C2', 'C3', 'C4', 'C5', 'C6') and ds.annotated_frames == tuple(range(1, 11))
-    for view in ds.views:
-        cam = ds.camera(view, 0)
-        feet, boxes = [], []
-        for frame in ds.annotated_frames:
-            for person in ds.annotations(frame):
-                box = person.boxes.get(view)
-                if box is not None and _inside(box):
-                    feet.append(person.world_xy)
-                    boxes.append(box.bottom_center)
-        uv = cam.project(np.c_[feet, np.zeros(len(feet))])  # NaN behind the camera: fails below
-        error = np.linalg.norm(uv - boxes, axis=1)
-        assert len(error) > 150 and np.median(error) <= 8.0, f'{view}: median {np.median(error):.1f} px'
-        assert np.percentile(error, 90) < 25.0
+    agreement = foot_point_agreement(sample)   # the measurement the experiments' Table III step reports
+    assert agreement['format'] == 'MultiviewXDataset' and set(agreement['views']) == set(ds.views)
+    for view, a in agreement['views'].items():
+        assert a['n'] > 150 and a['median_px'] <= 8.0, f'{view}: median {a["median_px"]:.1f} px'
+        assert a['p90_px'] < 25.0 and a['behind_camera'] == 0, (view, a)
 
 
 def test_reader_cameras_reproduce_raw_opencv_with_positive_depth(sample):

@@ -31,8 +31,8 @@ def foot_point_agreement(root) -> dict:
     annotated position projected on the ground (z = 0) and the bottom centre of its annotated box, over
     every annotated frame (boxes touching the border excluded).
 
-    Returns ``{'format', 'frames', 'views': {view: {'n', 'median_px', 'p90_px', 'camera_height_m',
-    'tilt_deg'}}}``.
+    Returns ``{'format', 'frames', 'views': {view: {'n', 'behind_camera' (positions projecting behind the
+    camera: NaN, left out of the statistics), 'median_px', 'p90_px', 'camera_height_m', 'tilt_deg'}}}``.
     """
     from matrix_core.datasets import open_dataset
 
@@ -52,7 +52,8 @@ def foot_point_agreement(root) -> dict:
             continue
         uv = cam.project(np.c_[np.asarray(feet, float), np.zeros(len(feet))])
         error = np.linalg.norm(uv - np.asarray(boxes, float), axis=1)
-        views[view] = {'n': int(len(error)), 'median_px': float(np.nanmedian(error)),
+        views[view] = {'n': int(len(error)), 'behind_camera': int(np.isnan(error).sum()),
+                       'median_px': float(np.nanmedian(error)),
                        'p90_px': float(np.nanpercentile(error, 90)), 'camera_height_m': float(cam.center[2]),
                        'tilt_deg': float(cam.tilt_deg)}
     return {'format': type(ds).__name__, 'frames': len(ds.annotated_frames), 'views': views}

@@ -156,23 +156,31 @@ def ground_texture(config, extent, m_per_px: float, rng: np.random.Generator,
     img = np.where(inside[..., None], floor, surround) + shade[..., None]
 
     if config.markings:
-        cx, cy = config.center
-        half_w = (ax1 - ax0) / 2
-        joints = [cx + d for d in np.arange(-half_w, half_w + 1e-6, (ax1 - ax0) / 4)]
-        joints_y = [cy + d for d in np.arange(-half_w, half_w + 1e-6, (ay1 - ay0) / 4)]
-        lines = (_line_mask(extent, shape, m_per_px, joints, 0.08, 0)
-                 | _line_mask(extent, shape, m_per_px, joints_y, 0.08, 1))
-        img[lines & inside] *= 0.62
-        outline = (_line_mask(extent, shape, m_per_px, [ax0, ax1], 0.3, 0)
-                   | _line_mask(extent, shape, m_per_px, [ay0, ay1], 0.3, 1))
-        box = ((xs[None, :] >= ax0 - 0.2) & (xs[None, :] <= ax1 + 0.2)
-               & (ys[:, None] >= ay0 - 0.2) & (ys[:, None] <= ay1 + 0.2))
-        img[outline & box] = (55, 55, 58)
+        _paint_markings(img, config, extent, m_per_px, xs, ys, inside)
     # Tiles of the surround: a 2 m grid of thin joints.
     sx = _line_mask(extent, shape, m_per_px, np.arange(np.floor(extent[0]), extent[2], 2.0), 0.04, 0)
     sy = _line_mask(extent, shape, m_per_px, np.arange(np.floor(extent[1]), extent[3], 2.0), 0.04, 1)
     img[(sx | sy) & ~inside] *= 0.75
     return np.clip(img, 0, 255).astype(np.uint8)
+
+
+def _paint_markings(img, config, extent, m_per_px, xs, ys, inside) -> None:
+    """Paint the area's joint lines (a 4 x 4 grid, darker) and its dark outline into ``img`` (rows, cols, 3)
+    float, in place; ``xs``/``ys`` are the texel centres' world coordinates, ``inside`` the area mask."""
+    shape = img.shape[:2]
+    ax0, ay0, ax1, ay1 = config.area
+    cx, cy = config.center
+    half_w = (ax1 - ax0) / 2
+    joints = [cx + d for d in np.arange(-half_w, half_w + 1e-6, (ax1 - ax0) / 4)]
+    joints_y = [cy + d for d in np.arange(-half_w, half_w + 1e-6, (ay1 - ay0) / 4)]
+    lines = (_line_mask(extent, shape, m_per_px, joints, 0.08, 0)
+             | _line_mask(extent, shape, m_per_px, joints_y, 0.08, 1))
+    img[lines & inside] *= 0.62
+    outline = (_line_mask(extent, shape, m_per_px, [ax0, ax1], 0.3, 0)
+               | _line_mask(extent, shape, m_per_px, [ay0, ay1], 0.3, 1))
+    box = ((xs[None, :] >= ax0 - 0.2) & (xs[None, :] <= ax1 + 0.2)
+           & (ys[:, None] >= ay0 - 0.2) & (ys[:, None] <= ay1 + 0.2))
+    img[outline & box] = (55, 55, 58)
 
 
 def _styled_ground(config, extent, m_per_px, rng, style: GroundStyle) -> np.ndarray:
@@ -193,18 +201,7 @@ def _styled_ground(config, extent, m_per_px, rng, style: GroundStyle) -> np.ndar
     img -= (style.dirt * dirt)[..., None]
     img *= 1.0 + (np.asarray(style.dirt_tint, np.float32) - 1.0) * np.minimum(dirt * 2.0, 1.0)[..., None]
     if config.markings:
-        cx, cy = config.center
-        half_w = (ax1 - ax0) / 2
-        joints = [cx + d for d in np.arange(-half_w, half_w + 1e-6, (ax1 - ax0) / 4)]
-        joints_y = [cy + d for d in np.arange(-half_w, half_w + 1e-6, (ay1 - ay0) / 4)]
-        lines = (_line_mask(extent, shape, m_per_px, joints, 0.08, 0)
-                 | _line_mask(extent, shape, m_per_px, joints_y, 0.08, 1))
-        img[lines & inside] *= 0.62
-        outline = (_line_mask(extent, shape, m_per_px, [ax0, ax1], 0.3, 0)
-                   | _line_mask(extent, shape, m_per_px, [ay0, ay1], 0.3, 1))
-        box = ((xs[None, :] >= ax0 - 0.2) & (xs[None, :] <= ax1 + 0.2)
-               & (ys[:, None] >= ay0 - 0.2) & (ys[:, None] <= ay1 + 0.2))
-        img[outline & box] = (55, 55, 58)
+        _paint_markings(img, config, extent, m_per_px, xs, ys, inside)
     for _ in range(style.road_lines):  # painted lines in the surround (white or yellow, dashed or not)
         axis = int(rng.integers(2))
         lo, hi = (extent[0], ax0) if rng.random() < 0.5 else (ax1, extent[2])
