@@ -23,7 +23,7 @@ import numpy as np
 import rclpy
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_graph import CHECKPOINT, ROOT, Probe, simulated_sequence  # noqa: E402  (one graph benchmark)
+from bench_graph import ROOT, Probe, simulated_sequence  # noqa: E402  (one graph benchmark)
 
 from matrix_bringup.graph import BagFacts, GraphSettings, graph_nodes  # noqa: E402
 from matrix_bringup.run_graph import Graph  # noqa: E402
@@ -119,7 +119,7 @@ def main() -> int:
     run = out / 'run'
     shutil.rmtree(run, ignore_errors=True)
     settings = GraphSettings(bag=str(bag), dataset=str(dataset), drones_per_process=args.drones_per_process,
-                             checkpoint=str(CHECKPOINT), monitor=True, monitor_out=str(run / 'monitor'),
+                             checkpoint='', monitor=True, monitor_out=str(run / 'monitor'),  # '': the default
                              record=str(run / 'recording'), lockstep_timeout=300.0)
     facts = BagFacts.read(settings.bag, settings.views)
     specs = graph_nodes(settings, facts)
