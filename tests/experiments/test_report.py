@@ -196,12 +196,15 @@ def test_report_needs_a_run(tmp_path):
         write_report(tmp_path, tmp_path / 'RESULTS.md')
 
 
-def test_report_lists_evaluations_with_failed_frames(hand_made):
+def test_report_lists_evaluations_with_failed_frames(tmp_path):
     """An evaluation step whose frames partly failed (issue 17) is listed with its counts."""
-    tmp_path, records, steps = hand_made
-    records[1] = {**records[1], 'num_frames': 10, 'failures': {'frames_failed': 2, 'frames_scored': 8,
+    records = variant_rows(QUICK)
+    k = next(i for i, r in enumerate(records) if r['model'] == 'complex_s0' and r['test'] == 'complex'
+             and r['calibration'] == 'ground_truth' and not r['dropped'])
+    records[k] = {**records[k], 'num_frames': 10, 'failures': {'frames_failed': 2, 'frames_scored': 8,
                                                                'views_masked': 3}}
-    write_run(tmp_path / 'run', QUICK, records, steps)
-    text = write_report(tmp_path / 'run', tmp_path / 'docs' / 'RESULTS.md').read_text()
+    write_run(tmp_path / 'run', QUICK, records, {'eval/x': {'state': 'done', 'wall_s': 1.0}}, table=TABLE)
+    text = write_report(tmp_path / 'run', tmp_path / 'docs' / 'RESULTS.md', repo=tmp_path).read_text()
     assert '## Evaluations with failed frames or masked views' in text
+    assert 'complex_s0 on complex (ground_truth, views' in text and '2 of 10 frames failed, 3 views masked' in text
     assert 'complex_s0 on complex (ground_truth, views' in text and '2 of 10 frames failed, 3 views masked' in text

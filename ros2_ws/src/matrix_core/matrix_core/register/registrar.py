@@ -124,6 +124,7 @@ class Registrar:
         """Match ``cur`` to ``target`` (whose pixels map to the reference's by ``target_to_ref``), fit, gate."""
         s = self.settings
         cam = self.reference.camera
+        cv2.setRNGSeed(s.seed)  # OpenCV's global RNG, seeded per registration (as before the seeded RANSAC)
         pairs = match_symmetric(cur.desc, target.desc, s.ratio, s.matcher)
         # Fit in reference pixels, so that the inlier threshold is in full-resolution reference pixels.
         dst = cv2.perspectiveTransform(target.xy[pairs[:, 1]].reshape(-1, 1, 2), target_to_ref).reshape(-1, 2) \
