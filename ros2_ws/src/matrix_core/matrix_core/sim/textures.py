@@ -139,13 +139,7 @@ def ground_texture(config, extent, m_per_px: float, rng: np.random.Generator,
     """
     if style is not None:
         return _styled_ground(config, extent, m_per_px, rng, style)
-    shape = texture_shape(extent, m_per_px)
-    xs, ys = _world_axes(extent, shape, m_per_px)
-    ax0, ay0, ax1, ay1 = config.area
-    inside = ((xs[None, :] >= ax0) & (xs[None, :] <= ax1)) & ((ys[:, None] >= ay0) & (ys[:, None] <= ay1))
-
-    shade = (9.0 * value_noise(shape, m_per_px, 5.0, rng) + 7.0 * value_noise(shape, m_per_px, 0.7, rng)
-             + 4.0 * value_noise(shape, m_per_px, 0.12, rng) + 5.0 * value_noise(shape, m_per_px, 0.01, rng))
+    shape, xs, ys, inside, shade = _ground_base(config, extent, m_per_px, rng)
     if config.floor == 'cobblestone':
         shade += np.where(inside, _cobblestone_shade(extent, shape, m_per_px, rng), 0.0)
     # Stains: dark blotches give the registration stage distinctive, non-repeating features.
@@ -162,6 +156,19 @@ def ground_texture(config, extent, m_per_px: float, rng: np.random.Generator,
     sy = _line_mask(extent, shape, m_per_px, np.arange(np.floor(extent[1]), extent[3], 2.0), 0.04, 1)
     img[(sx | sy) & ~inside] *= 0.75
     return np.clip(img, 0, 255).astype(np.uint8)
+
+
+def _ground_base(config, extent, m_per_px, rng) -> tuple:
+    """What every ground texture starts from: (shape, xs (cols,), ys (rows,) texel-centre world coordinates,
+    inside (rows, cols) bool area mask, shade (rows, cols) float multi-scale grain; the registration matches
+    the grain's features)."""
+    shape = texture_shape(extent, m_per_px)
+    xs, ys = _world_axes(extent, shape, m_per_px)
+    ax0, ay0, ax1, ay1 = config.area
+    inside = ((xs[None, :] >= ax0) & (xs[None, :] <= ax1)) & ((ys[:, None] >= ay0) & (ys[:, None] <= ay1))
+    shade = (9.0 * value_noise(shape, m_per_px, 5.0, rng) + 7.0 * value_noise(shape, m_per_px, 0.7, rng)
+             + 4.0 * value_noise(shape, m_per_px, 0.12, rng) + 5.0 * value_noise(shape, m_per_px, 0.01, rng))
+    return shape, xs, ys, inside, shade
 
 
 def _paint_markings(img, config, extent, m_per_px, xs, ys, inside) -> None:
@@ -184,13 +191,8 @@ def _paint_markings(img, config, extent, m_per_px, xs, ys, inside) -> None:
 
 
 def _styled_ground(config, extent, m_per_px, rng, style: GroundStyle) -> np.ndarray:
-    shape = texture_shape(extent, m_per_px)
-    xs, ys = _world_axes(extent, shape, m_per_px)
+    shape, xs, ys, inside, shade = _ground_base(config, extent, m_per_px, rng)
     ax0, ay0, ax1, ay1 = config.area
-    inside = ((xs[None, :] >= ax0) & (xs[None, :] <= ax1)) & ((ys[:, None] >= ay0) & (ys[:, None] <= ay1))
-    # The same multi-scale grain as the plain ground: the registration matches these features.
-    shade = (9.0 * value_noise(shape, m_per_px, 5.0, rng) + 7.0 * value_noise(shape, m_per_px, 0.7, rng)
-             + 4.0 * value_noise(shape, m_per_px, 0.12, rng) + 5.0 * value_noise(shape, m_per_px, 0.01, rng))
     shade += np.where(inside, _material_shade(style.inside, extent, shape, m_per_px, rng, style.tile_m),
                       _material_shade(style.surround, extent, shape, m_per_px, rng, style.tile_m))
     stains = value_noise(shape, m_per_px, 1.5, rng)
