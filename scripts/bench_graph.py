@@ -39,10 +39,11 @@ from matrix_ros.qos import qos_by_name
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def simulated_sequence(out: Path, frames: int, seed: int = 11) -> tuple:
-    """(bag, dataset) of a seeded complex-variant sequence at 1920x1080, made once."""
+def simulated_sequence(out: Path, frames: int, seed: int = 11, size: tuple = (1920, 1080)) -> tuple:
+    """(bag, dataset) of a seeded complex-variant sequence of ``size`` (width, height) pixels, made once."""
     if not (out / 'bag' / 'metadata.yaml').is_file():
         subprocess.run(['matrix-tracker', 'simulate', '--config', 'complex', '--frames', str(frames), '--seed', str(seed),
+                        '--width', str(size[0]), '--height', str(size[1]),
                         '--image_ext', '.jpg', '--bag', '--compressed', '--out', str(out)], check=True)
     return out / 'bag', out
 
