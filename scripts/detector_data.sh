@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Simulate the sequences of the default detector's recipe (bev/configs/detector.yaml names the same commands):
-# training (seeds 101-103), validation (111, 112) and held-out test (201, 202) sequences into data/.
-# Complete folders are kept, partial ones regenerated. Usage: bash scripts/detector_data.sh [train|val|test ...]
+# training (seeds 101-103), validation (111, 112), tracker validation (113, 114: longer sequences on which
+# the tracker settings are chosen, scripts/tune_tracker.py) and held-out test (201, 202) sequences into data/.
+# Complete folders are kept, partial ones regenerated. Usage: bash scripts/detector_data.sh [train|val|trackval|test ...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/env.sh
@@ -18,7 +19,8 @@ for s in "${sets[@]}"; do
     train) sim complex 250 101 complex_train_s101; sim complex 200 102 complex_train_s102
            sim modified 150 103 modified_train_s103 ;;
     val)   sim complex 30 111 complex_val_s111; sim modified 30 112 modified_val_s112 ;;
+    trackval) sim complex 60 113 complex_trackval_s113; sim modified 60 114 modified_trackval_s114 ;;
     test)  sim complex 60 201 complex_test_s201; sim modified 60 202 modified_test_s202 ;;
-    *) echo "unknown set $s (train, val, test)" >&2; exit 2 ;;
+    *) echo "unknown set $s (train, val, trackval, test)" >&2; exit 2 ;;
   esac
 done

@@ -29,9 +29,10 @@ def files(matrix_sample, tmp_path_factory):
 
 
 def test_track_then_score(files, capsys):
-    assert main(['track', str(files / 'dets.txt'), '--out', str(files / 'tracks.txt'), '--birth_hits', '2']) == 0
+    assert main(['track', str(files / 'dets.txt'), '--out', str(files / 'tracks.txt'), '--birth_hits', '2',
+                 '--report_coasting', '0']) == 0
     tracks = read_bev_points(files / 'tracks.txt')
-    assert tracks.has_ids and 30 not in set(tracks.frames)   # nothing invented in the empty frame
+    assert tracks.has_ids and 30 not in set(tracks.frames)   # nothing reported in the empty frame
     assert 38 <= len(np.unique(tracks.ids)) <= 50
     capsys.readouterr()
     assert main(['score', str(files / 'gt.txt'), str(files / 'tracks.txt'), '--json']) == 0

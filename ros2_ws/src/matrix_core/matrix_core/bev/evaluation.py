@@ -78,11 +78,22 @@ def evaluate(model, frames_data, tracker_settings: TrackerSettings = None, thres
     failed = {}
     gt = ground_truth_points(frames_data, failed)
     outputs = [o for o in run_frames(model, frames_data, progress, failed) if o.frame not in failed]
+    return track_and_score(frames_data.frames, outputs, gt, tracker_settings, threshold, gate, failed,
+                           dict(getattr(frames_data, 'failures', {})))
+
+
+def track_and_score(frames: list, outputs: list, gt: BevPoints, tracker_settings: TrackerSettings = None,
+                    threshold: float = 0.5, gate: float = 1.0, failed: dict = None,
+                    masked_views: dict = None) -> EvaluationResult:
+    """Track the model's per-frame ``outputs`` (:class:`FrameOutput`, the scored frames) over the sequence's
+    ``frames`` and score detections and tracks against ``gt`` (only its scored frames count). A frame of
+    ``frames`` without an output is a frame without detections for the tracker. Kept apart from inference so
+    that tracker settings can be compared on one inference run (scripts/tune_tracker.py)."""
     by_frame = {o.frame: o for o in outputs}
     tracker = BevTracker(tracker_settings or TrackerSettings())
     d_frames, d_xy, d_scores = [], [], []
     t_frames, t_ids, t_xy, t_scores, t_det_xy = [], [], [], [], []
-    for frame in frames_data.frames:
+    for frame in frames:
         o = by_frame.get(frame)
         if o is None:
             tracker.update(BevDetections(np.zeros((0, 2)), np.zeros(0)))   # a frame without detections
@@ -105,4 +116,4 @@ def evaluate(model, frames_data, tracker_settings: TrackerSettings = None, thres
     return EvaluationResult(detection_metrics(gt, dets, threshold), tracking_metrics(gt, tracks, gate), gt, dets,
                             tracks, outputs, BevPoints(t_frames, np.reshape(t_det_xy, (-1, 2)), ids=t_ids,
                                                        scores=t_scores),
-                            dict(sorted(failed.items())), dict(getattr(frames_data, 'failures', {})))
+                            dict(sorted((failed or {}).items())), dict(masked_views or {}))
