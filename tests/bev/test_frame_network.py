@@ -122,3 +122,13 @@ def test_an_encoder_with_signed_features_is_refused():
     model.encoder.fuse = model.encoder.fuse[:1]      # no final ReLU: the pooling's shortcut would be wrong
     with pytest.raises(ValueError, match='non-negative encoder features'):
         FrameNetwork(model, (8, 8))
+
+
+def test_heads_at_no_peak(shipped):
+    model, settings, data = shipped
+    network = FrameNetwork(model, data.grid.shape)
+    x = data.inputs(0)
+    out = network(x['images'], x['feat_H_grid'], x['view_mask'])
+    none = torch.zeros(0, dtype=torch.long)
+    tracking, offset = network.heads_at(out.fused, none, none, offset=True)
+    assert tracking.shape == offset.shape == (0, 2)

@@ -126,7 +126,7 @@ class FrameNetwork:
         padded = F.pad(fused[0], (1, 1, 1, 1))
         d = torch.arange(3)
         patches = padded[:, rows[:, None, None] + d[None, :, None], cols[:, None, None] + d[None, None, :]]
-        patches = patches.permute(1, 0, 2, 3).reshape(len(rows), -1)          # (N, C*3*3) as the conv weight
+        patches = patches.permute(1, 0, 2, 3).reshape(len(rows), padded.shape[0] * 9)   # (N, C*3*3) as the weight
 
         def at(head):
             conv, last = head[0], head[2]
