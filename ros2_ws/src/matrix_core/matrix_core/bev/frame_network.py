@@ -64,7 +64,8 @@ class FrameNetwork:
             raise ValueError('FrameNetwork needs non-negative encoder features (an encoder ending in a ReLU): '
                              'its pooling relies on them')
         self.grid_shape, self.stride = tuple(grid_shape), model.stride
-        # channels_last: oneDNN's convolutions on one core measured 1.1-1.8x faster than on NCHW tensors
+        # channels_last: on one core the encoder measured 1.15x and the aggregation up to 1.8x faster than on
+        # NCHW tensors; elsewhere no clear difference on this shared machine (scripts/bench_routes.py)
         self.encoder = fold_batch_norms(model.encoder).to(memory_format=CL)
         self.aggregate = fold_batch_norms(model.aggregate.convs).to(memory_format=CL)
         self.heads = copy.deepcopy(model.heads).eval().to(memory_format=CL)
