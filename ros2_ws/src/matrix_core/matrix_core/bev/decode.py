@@ -7,6 +7,8 @@ complex.pt): matched-detection error 0.042 m with 'heatmap', 0.104 m with 'offse
 offset head did not generalise beyond the training frames; it does learn them, tests/bev/test_training.py).
 """
 
+from dataclasses import dataclass
+
 import numpy as np
 import torch
 import torch.nn.functional as F
@@ -15,43 +17,74 @@ from matrix_core.geometry.grid import BevGrid
 from matrix_core.tracking.track import BevDetections
 
 
-def decode_detections(heatmap_logits: torch.Tensor, offset: torch.Tensor, tracking: torch.Tensor,
-                      grid: BevGrid, score_threshold: float = 0.3, nms_radius_m: float = 0.5,
-                      max_detections: int = 200, subcell: str = 'heatmap') -> BevDetections:
-    """Detections of ONE frame.
+@dataclass
+class Peaks:
+    """Heatmap peaks of one frame: ``scores`` (R, Q) sigmoid map; ``rows``, ``cols``, ``score`` (N,) of the peaks,
+    highest score first."""
 
-    Args:
-        heatmap_logits: (1, R, Q) logits.  offset, tracking: (2, R, Q) metres (see ``heads.py``).
-        grid: the BEV grid the maps live on.
-        score_threshold: minimum sigmoid score of a peak.
-        nms_radius_m: a cell is a peak when it is the maximum within this radius (square max-pool window).
-        max_detections: keep the highest-scoring peaks.
-        subcell: 'heatmap', 'offset' or 'none' (see the module docstring).
+    scores: torch.Tensor
+    rows: torch.Tensor
+    cols: torch.Tensor
+    score: torch.Tensor
 
-    Returns:
-        :class:`BevDetections` in world metres with scores and tracking offsets. Non-finite network outputs
-        raise ValueError rather than producing invented positions.
-    """
+
+def find_peaks(heatmap_logits: torch.Tensor, grid: BevGrid, score_threshold: float = 0.3,
+               nms_radius_m: float = 0.5, max_detections: int = 200) -> Peaks:
+    """Peaks of ONE frame's (1, R, Q) ``heatmap_logits``: cells that are the maximum within ``nms_radius_m``
+    (square max-pool window) with a sigmoid score >= ``score_threshold``, the ``max_detections`` highest.
+    Non-finite logits raise ValueError."""
     scores = torch.sigmoid(heatmap_logits.detach().float())
-    if not torch.isfinite(scores).all() or not torch.isfinite(offset).all() or not torch.isfinite(tracking).all():
+    if not torch.isfinite(scores).all():
         raise ValueError('network output contains NaN or infinite values')
     k = 2 * max(int(round(nms_radius_m / grid.cell)), 1) + 1
     peaks = scores.eq(F.max_pool2d(scores[None], k, stride=1, padding=k // 2)[0]) & (scores >= score_threshold)
     _, rows, cols = torch.nonzero(peaks, as_tuple=True)
     s = scores[0, rows, cols]
     order = torch.argsort(s, descending=True)[:max_detections]
-    rows, cols, s = rows[order], cols[order], s[order]
+    return Peaks(scores[0], rows[order], cols[order], s[order])
+
+
+def peak_detections(peaks: Peaks, grid: BevGrid, tracking: torch.Tensor, offset: torch.Tensor = None,
+                    subcell: str = 'heatmap') -> BevDetections:
+    """:class:`BevDetections` of ``peaks`` given the heads' values at them: ``tracking`` (N, 2) and, for
+    ``subcell='offset'``, ``offset`` (N, 2) metres. Non-finite values raise ValueError."""
+    for values in (tracking, offset):
+        if values is not None and not torch.isfinite(values).all():
+            raise ValueError('network output contains NaN or infinite values')
+    rows, cols = peaks.rows, peaks.cols
     centres = grid.cell_to_world(np.stack([cols.numpy(), rows.numpy()], axis=1).astype(np.float64))
     if subcell == 'offset':
-        off = offset.detach().float()[:, rows, cols].T.numpy().astype(np.float64)
+        off = offset.detach().float().numpy().astype(np.float64)
     elif subcell == 'heatmap':
-        off = heatmap_centroid(scores[0], rows, cols) * grid.cell
+        off = heatmap_centroid(peaks.scores, rows, cols) * grid.cell
     elif subcell == 'none':
         off = np.zeros((len(rows), 2))
     else:
         raise ValueError(f"subcell must be 'heatmap', 'offset' or 'none', got {subcell!r}")
-    trk = tracking.detach().float()[:, rows, cols].T.numpy().astype(np.float64)
-    return BevDetections(centres + off, s.numpy().astype(np.float64), trk)
+    trk = tracking.detach().float().numpy().astype(np.float64).reshape(-1, 2)
+    return BevDetections(centres + off.reshape(-1, 2), peaks.score.numpy().astype(np.float64), trk)
+
+
+def decode_detections(heatmap_logits: torch.Tensor, offset: torch.Tensor, tracking: torch.Tensor,
+                      grid: BevGrid, score_threshold: float = 0.3, nms_radius_m: float = 0.5,
+                      max_detections: int = 200, subcell: str = 'heatmap') -> BevDetections:
+    """Detections of ONE frame from full maps.
+
+    Args:
+        heatmap_logits: (1, R, Q) logits.  offset, tracking: (2, R, Q) metres (see ``heads.py``).
+        grid: the BEV grid the maps live on.
+        score_threshold, nms_radius_m, max_detections: see :func:`find_peaks`.
+        subcell: 'heatmap', 'offset' or 'none' (see the module docstring).
+
+    Returns:
+        :class:`BevDetections` in world metres with scores and tracking offsets. Non-finite network outputs
+        raise ValueError rather than producing invented positions.
+    """
+    if not torch.isfinite(offset).all() or not torch.isfinite(tracking).all():
+        raise ValueError('network output contains NaN or infinite values')
+    peaks = find_peaks(heatmap_logits, grid, score_threshold, nms_radius_m, max_detections)
+    at = (slice(None), peaks.rows, peaks.cols)
+    return peak_detections(peaks, grid, tracking.detach().float()[at].T, offset.detach().float()[at].T, subcell)
 
 
 def heatmap_centroid(scores: torch.Tensor, rows: torch.Tensor, cols: torch.Tensor) -> np.ndarray:

@@ -5,7 +5,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from matrix_core.bev.decode import decode_detections
+from matrix_core.bev.decode import find_peaks, peak_detections
+from matrix_core.bev.frame_network import FrameNetwork
 
 
 @dataclass
@@ -18,13 +19,15 @@ class FrameOutput:
 
 
 class SequenceRunner:
-    """Feeds consecutive frames to the model, handing each frame's BEV features to the next.
+    """Feeds consecutive frames to the model, handing each frame's BEV features to the next. The model runs as a
+    :class:`~matrix_core.bev.frame_network.FrameNetwork` (its outputs, less work; a snapshot of its weights).
 
     ``reset()`` forgets the previous frame (start of a new sequence or after a gap in the stream).
     """
 
     def __init__(self, model, settings, grid):
-        self.model, self.settings, self.grid = model.eval(), settings, grid
+        self.settings, self.grid = settings, grid
+        self.network = FrameNetwork(model.eval(), grid.shape)
         self.reset()
 
     def reset(self) -> None:
@@ -34,11 +37,12 @@ class SequenceRunner:
     def step(self, frame: int, images, feat_H_grid, view_mask) -> FrameOutput:
         """One frame: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3), ``view_mask`` (V,) bool."""
         s = self.settings
-        out = self.model(images[None], feat_H_grid[None], view_mask[None], self.grid.shape, self.previous)
-        self.previous = out['bev'] if s.temporal else None
-        dets = decode_detections(out['heatmap'][0], out['offset'][0], out['tracking'][0], self.grid,
-                                 s.score_threshold, s.nms_radius_m, s.max_detections, s.subcell)
-        return FrameOutput(frame, dets, torch.sigmoid(out['heatmap'][0, 0]).numpy())
+        out = self.network(images, feat_H_grid, view_mask, self.previous)
+        self.previous = out.carry if s.temporal else None
+        peaks = find_peaks(out.heatmap, self.grid, s.score_threshold, s.nms_radius_m, s.max_detections)
+        tracking, offset = self.network.heads_at(out.fused, peaks.rows, peaks.cols, offset=s.subcell == 'offset')
+        dets = peak_detections(peaks, self.grid, tracking, offset, s.subcell)
+        return FrameOutput(frame, dets, peaks.scores.numpy())
 
 
 def run_frames(model, frames_data, progress: bool = True, failures: dict = None) -> list:

@@ -46,6 +46,27 @@ def feat_H_grid(img_H_ground: np.ndarray, ground_H_grid: np.ndarray, image_size:
     return feat_H_img @ img_H_ground @ ground_H_grid
 
 
+def sampling_grid(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tuple) -> tuple:
+    """Where :func:`warp_to_grid` samples: (grid (N, rows, cols, 2) for ``F.grid_sample`` (align_corners=False),
+    seen (N, 1, rows, cols) float). ``feat_H_grid`` (N, 3, 3) as in :func:`warp_to_grid`, ``feat_size`` (h, w)
+    of the feature maps. A cell not seen gets a grid point far outside the map (sampled as 0)."""
+    h, w = feat_size
+    rows, cols = grid_shape
+    dt = feat_H_grid.dtype if feat_H_grid.is_floating_point() else torch.float32
+    r, c = torch.meshgrid(torch.arange(rows, dtype=dt), torch.arange(cols, dtype=dt), indexing='ij')
+    cells = torch.stack([c, r, torch.ones_like(c)], dim=-1).reshape(1, -1, 3)       # (1, R*C, 3)
+    uvw = cells @ feat_H_grid.to(dt).transpose(1, 2)                                 # (N, R*C, 3)
+    depth = uvw[..., 2]
+    in_front = depth > 1e-9
+    uv = uvw[..., :2] / torch.where(in_front, depth, torch.ones_like(depth)).unsqueeze(-1)
+    inside = in_front & (uv[..., 0] >= -0.5) & (uv[..., 0] <= w - 0.5) & (uv[..., 1] >= -0.5) & (uv[..., 1] <= h - 0.5)
+    # grid_sample with align_corners=False: -1 and +1 are the outer edges of the border pixels.
+    norm = torch.stack([(uv[..., 0] + 0.5) / w * 2 - 1, (uv[..., 1] + 0.5) / h * 2 - 1], dim=-1)
+    norm = torch.where(inside.unsqueeze(-1), norm, torch.full_like(norm, -2.0))
+    n = feat_H_grid.shape[0]
+    return norm.reshape(n, rows, cols, 2), inside.reshape(n, 1, rows, cols).to(dt)
+
+
 def warp_to_grid(features: torch.Tensor, feat_H_grid: torch.Tensor, grid_shape: tuple) -> tuple:
     """Sample feature maps at every BEV cell.
 
@@ -56,23 +77,8 @@ def warp_to_grid(features: torch.Tensor, feat_H_grid: torch.Tensor, grid_shape: 
 
     Returns:
         (bev (N, C, rows, cols), seen (N, 1, rows, cols) float): ``seen`` is 1 where the cell lies in front
-        of the camera and inside the feature map; ``bev`` is 0 elsewhere.
+        of the camera and inside the feature map; ``bev`` is 0 elsewhere (sampled far outside the map).
     """
-    n, _, h, w = features.shape
-    rows, cols = grid_shape
-    dev, dt = features.device, features.dtype
-    r, c = torch.meshgrid(torch.arange(rows, device=dev, dtype=dt), torch.arange(cols, device=dev, dtype=dt),
-                          indexing='ij')
-    cells = torch.stack([c, r, torch.ones_like(c)], dim=-1).reshape(1, -1, 3)       # (1, R*C, 3)
-    uvw = cells @ feat_H_grid.to(dt).transpose(1, 2)                                 # (N, R*C, 3)
-    depth = uvw[..., 2]
-    in_front = depth > 1e-9
-    uv = uvw[..., :2] / torch.where(in_front, depth, torch.ones_like(depth)).unsqueeze(-1)
-    inside = in_front & (uv[..., 0] >= -0.5) & (uv[..., 0] <= w - 0.5) & (uv[..., 1] >= -0.5) & (uv[..., 1] <= h - 0.5)
-    # grid_sample with align_corners=False: -1 and +1 are the outer edges of the border pixels.
-    norm = torch.stack([(uv[..., 0] + 0.5) / w * 2 - 1, (uv[..., 1] + 0.5) / h * 2 - 1], dim=-1)
-    norm = torch.where(inside.unsqueeze(-1), norm, torch.full_like(norm, -2.0))
-    bev = F.grid_sample(features, norm.reshape(n, rows, cols, 2), mode='bilinear', padding_mode='zeros',
-                        align_corners=False)
-    seen = inside.reshape(n, 1, rows, cols).to(dt)
-    return bev * seen, seen
+    grid, seen = sampling_grid(feat_H_grid.to(features.dtype), features.shape[-2:], grid_shape)
+    bev = F.grid_sample(features, grid, mode='bilinear', padding_mode='zeros', align_corners=False)
+    return bev, seen

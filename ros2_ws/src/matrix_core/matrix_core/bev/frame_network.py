@@ -1,0 +1,137 @@
+"""A trained :class:`~matrix_core.bev.model.BevFusionNet` rearranged for inference one frame at a time (live
+fusion, offline evaluation): the outputs of ``BevFusionNet.forward`` (to float rounding, tested against it on
+real frames) with less work per frame. Profiled on one core (``scripts/profile_fuse.py``), what it saves:
+
+- batch norms folded into the convolutions before them (eval mode: a per-channel affine map);
+- only the views present are encoded and warped (forward warps zeros for the missing ones), and a view's
+  sampling grid is computed once per distinct ``feat_H_grid`` (a static camera: once);
+- pooling: the lifted features are >= 0 (the encoder ends in a ReLU, bilinear sampling keeps the sign) and 0
+  where a view does not see the cell, so the masked mean's sum is the plain sum and the masked max the plain
+  max (``aggregation.masked_view_pool`` builds masked copies of the (V, C, R, Q) features);
+- the temporal block's two passes (with the previous features, for the heads; without, the features handed
+  to the next frame) share the convolution of the current features: its first convolution is linear in its
+  input (current, previous, flag) and is split by input channels;
+- the tracking and offset heads are evaluated only at the heatmap's peaks, the only cells decoding reads.
+
+The weights are a snapshot taken at construction (a model trained further needs a new instance).
+"""
+
+import copy
+from dataclasses import dataclass
+
+import torch
+import torch.nn.functional as F
+from torch import nn
+from torch.nn.utils.fusion import fuse_conv_bn_eval
+
+from matrix_core.bev.lifting import sampling_grid
+
+CL = torch.channels_last
+
+
+def fold_batch_norms(module: nn.Module) -> nn.Module:
+    """A copy of ``module`` (eval mode) in which every BatchNorm2d that directly follows a Conv2d inside an
+    ``nn.Sequential`` is folded into that convolution (the batch norm becomes an identity)."""
+    module = copy.deepcopy(module).eval()
+    for seq in [m for m in module.modules() if isinstance(m, nn.Sequential)]:
+        for i in range(len(seq) - 1):
+            if isinstance(seq[i], nn.Conv2d) and isinstance(seq[i + 1], nn.BatchNorm2d):
+                seq[i], seq[i + 1] = fuse_conv_bn_eval(seq[i], seq[i + 1]), nn.Identity()
+    return module
+
+
+@dataclass
+class FrameResult:
+    """One frame: ``heatmap`` (1, R, Q) logits; ``fused`` (1, C, R, Q) the features the heads read (for
+    :meth:`FrameNetwork.heads_at`); ``carry`` (1, C, R, Q) the features to pass as ``previous`` next frame
+    (``BevFusionNet.forward``'s ``bev``)."""
+
+    heatmap: torch.Tensor
+    fused: torch.Tensor
+    carry: torch.Tensor
+
+
+class FrameNetwork:
+    """Args: ``model`` a BevFusionNet (its weights are copied), ``grid_shape`` (rows, cols) of the BEV grid.
+
+    Call with one frame: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3), ``view_mask`` (V,) bool and
+    ``previous`` (1, C, R, Q) or None -> :class:`FrameResult`. No gradients.
+    """
+
+    def __init__(self, model, grid_shape: tuple):
+        fuse = getattr(model.encoder, 'fuse', None)
+        if not (isinstance(fuse, nn.Sequential) and isinstance(fuse[-1], nn.ReLU)):
+            raise ValueError('FrameNetwork needs non-negative encoder features (an encoder ending in a ReLU): '
+                             'its pooling relies on them')
+        self.grid_shape, self.stride = tuple(grid_shape), model.stride
+        # channels_last: on one core the encoder measured 1.15x and the aggregation up to 1.8x faster than on
+        # NCHW tensors; elsewhere no clear difference on this shared machine (scripts/bench_routes.py)
+        self.encoder = fold_batch_norms(model.encoder).to(memory_format=CL)
+        self.aggregate = fold_batch_norms(model.aggregate.convs).to(memory_format=CL)
+        self.heads = copy.deepcopy(model.heads).eval().to(memory_format=CL)
+        self._grids = {}   # view index -> (feat_H_grid bytes, (1, R, Q, 2) grid, (1, 1, R, Q) seen)
+        self.temporal = None
+        if model.temporal is not None:
+            convs = fold_batch_norms(model.temporal.convs).to(memory_format=CL)
+            first, c = convs[0], model.heads.heatmap[0].in_channels
+            w = first.weight.detach()
+            self.temporal = {
+                'current': w[:, :c].contiguous(memory_format=CL), 'previous': w[:, c:2 * c].contiguous(memory_format=CL),
+                'bias': first.bias.detach(),
+                # the flag channel (1 with a previous frame) through the zero-padded convolution: fixed per grid
+                'flag': F.conv2d(torch.ones(1, 1, *self.grid_shape), w[:, 2 * c:], padding=first.padding
+                                 ).contiguous(memory_format=CL),
+                'rest': convs[1:]}
+
+    @torch.no_grad()
+    def __call__(self, images, feat_H_grid, view_mask, previous=None) -> FrameResult:
+        views = torch.nonzero(view_mask.bool()).flatten().tolist()
+        n_views = len(view_mask)
+        rows, cols = self.grid_shape
+        if views:
+            feats = self.encoder(images[views].contiguous(memory_format=CL)).contiguous()   # grid_sample: NCHW
+            grids, seen = zip(*(self._grid(v, feat_H_grid[v], feats.shape[-2:]) for v in views))
+            bev = F.grid_sample(feats, torch.cat(grids), mode='bilinear', padding_mode='zeros', align_corners=False)
+            count = torch.cat(seen).sum(dim=0, keepdim=True)
+            pooled = torch.cat([bev.sum(dim=0, keepdim=True) / count.clamp(min=1.0), bev.amax(dim=0, keepdim=True),
+                                count / n_views], dim=1)
+        else:
+            pooled = images.new_zeros(1, 2 * self.encoder.out_channels + 1, rows, cols)
+        aggregated = self.aggregate(pooled.contiguous(memory_format=CL))
+        if self.temporal is None:
+            return FrameResult(self._heatmap(aggregated), aggregated, aggregated)
+        t = self.temporal
+        current = F.conv2d(aggregated, t['current'], t['bias'], padding=1)
+        carry = aggregated + t['rest'](torch.relu(current))
+        fused = carry
+        if previous is not None:
+            with_previous = current + F.conv2d(previous, t['previous'], padding=1) + t['flag']
+            fused = aggregated + t['rest'](torch.relu(with_previous))
+        return FrameResult(self._heatmap(fused), fused, carry)
+
+    def _grid(self, view: int, feat_H_grid, feat_size) -> tuple:
+        """The view's sampling grid and seen mask, recomputed only when its feat_H_grid changed."""
+        key = feat_H_grid.numpy().tobytes()
+        cached = self._grids.get(view)
+        if cached is None or cached[0] != key:
+            cached = self._grids[view] = (key, *sampling_grid(feat_H_grid[None], feat_size, self.grid_shape))
+        return cached[1:]
+
+    def _heatmap(self, fused):
+        return self.heads.heatmap(fused)[0]
+
+    @torch.no_grad()
+    def heads_at(self, fused, rows, cols, offset: bool = False) -> tuple:
+        """(tracking (N, 2), offset (N, 2) or None) of the heads at the (N,) cells ``rows``, ``cols`` of
+        ``fused`` (1, C, R, Q): each head's 3x3 convolution on the cell's zero-padded 3x3 neighbourhood."""
+        padded = F.pad(fused[0], (1, 1, 1, 1))
+        d = torch.arange(3)
+        patches = padded[:, rows[:, None, None] + d[None, :, None], cols[:, None, None] + d[None, None, :]]
+        patches = patches.permute(1, 0, 2, 3).reshape(len(rows), padded.shape[0] * 9)   # (N, C*3*3) as the weight
+
+        def at(head):
+            conv, last = head[0], head[2]
+            hidden = torch.relu(patches @ conv.weight.reshape(conv.out_channels, -1).T + conv.bias)
+            return hidden @ last.weight.reshape(last.out_channels, -1).T + last.bias
+
+        return at(self.heads.tracking), at(self.heads.offset) if offset else None
