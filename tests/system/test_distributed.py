@@ -169,7 +169,7 @@ def test_discovery_server_without_multicast(matrix_sample, tmp_path):
     d = deployment(settings, BagFacts.read(str(bag), VIEWS))
     logs = tmp_path / 'logs'
     with Hosts(VIEWS, multicast=False) as hosts:
-        procs = start(d, hosts, logs, discovery='server', captures=[watched])
+        procs = start(d, hosts, logs, discovery='server', image_probes=VIEWS, captures=[watched])
         fused = lambda: {line['stamp'] for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
                          if line['kind'] == 'fuse'}
         players = {label: p for label, p in procs.items() if label.endswith('bag_player')}
@@ -193,8 +193,12 @@ def test_discovery_server_without_multicast(matrix_sample, tmp_path):
     status = {line['stamp']: line for line in lines if line['kind'] == 'fuse'}
     stamps = [_stamp(k) for k in range(frames)]
     assert sorted(tracks) == stamps and tracks == sorted(tracks), tracks   # every frame once, in order
-    both = [s for s in stamps if status[s]['views_used'] == 2]
-    assert len(both) >= frames // 2, [status[s] for s in stamps]   # both drones discovered, through the server
+    # both drones found through the server: the images each published reached fuse (most of them: on a loaded
+    # machine one may come after its sync timeout; frames also miss homographies computed too late)
+    for view in VIEWS:
+        published = {line['stamp'] for line in read_probe(logs / f'{view}_probe.log') if line['kind'] == 'image'}
+        arrived = [s for s in published if 'no image' not in status[s]['missing'].get(view, '')]
+        assert published and len(arrived) >= len(published) / 2, (view, published, status)
     # D1's link: its images and geometry go up to the ground; none of D5's streams crosses it either way
     crossed = read_probe(logs / f'{watched}_capture.log')[-1]['streams']
     up = {(r['stream'], r['kind']) for r in crossed if r['direction'] == 'up' and r['peer'] == 'ground'}
