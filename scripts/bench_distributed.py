@@ -6,8 +6,8 @@ only its streams), register and calib; the ground host runs fuse and the recorde
 limited by ``tc tbf`` to ``--rate_mbit`` (one run per rate given) with a 1 MB queue. The replay runs on the
 recorded timing (``--replay_rate`` 1 = 2 frames/s, the sample's clock), frames back and forth over the
 sample's 5 frames. Reported per rate: bytes per frame per drone across its link (each direction; the link
-counters from the players' start to the end divided by the frames played: images, geometry, diagnostics,
-DDS announcements and acknowledgements), the JPEG bytes per image, packets the limit dropped at the drones'
+counters from the first frame (1 s before) to the end divided by the frames played: images, geometry,
+diagnostics, DDS announcements and acknowledgements), the JPEG bytes per image, packets the limit dropped at the drones'
 end, latency image -> tracks (the first drone's image arriving at its own host -> /tracks at the ground,
 wall clock of one machine), frames with tracks, frames fused with all views and frames with an image lost
 (fuse says 'no image' for a drone: dropped on its link or later than the sync timeout). The first drone's
@@ -48,8 +48,10 @@ def run_once(args, bag: Path, views: list, rate_mbit: float, out: Path) -> dict:
     d = deployment(settings, BagFacts.read(str(bag), views))
     logs = out / 'logs'
     with Hosts(views, rate_mbit=rate_mbit, multicast=args.discovery == 'multicast') as hosts:
-        procs = start(d, hosts, logs, args.discovery, image_probes=views[:1], captures=views[:1])
-        before = {v: hosts.link_bytes(v) for v in views}   # discovery of all but the players is done
+        procs = start(d, hosts, logs, args.discovery, image_probes=views[:1], captures=views[:1],
+                      player_lead_s=args.player_lead)
+        time.sleep(max(0.0, args.player_lead - 1.0))   # to just before the first frame: count the replay only
+        before = {v: hosts.link_bytes(v) for v in views}
         before_t = time.time()
         players = [p for label, p in procs.items() if label.endswith('bag_player')]
         deadline = time.monotonic() + args.timeout
@@ -182,6 +184,9 @@ def main(argv=None) -> int:
     parser.add_argument('--latency_margin', type=float, default=0.5,
                         help='s the p95 latency may exceed the reference run')
     parser.add_argument('--timeout', type=float, default=600.0, help='seconds a run may take')
+    parser.add_argument('--player_lead', type=float, default=10.0,
+                        help='s from all hosts ready to the first frame (longer on a loaded machine: a player '
+                             'not up by then skips the frames due before)')
     parser.add_argument('--out', type=Path, default=ROOT / 'out' / 'bench_distributed')
     parser.add_argument('--layout', action='store_true', help='print what runs where and what crosses each link')
     args = parser.parse_args(argv)

@@ -5,7 +5,7 @@ and fuse (on the ground) over DDS across the links; no namespace or process is l
 - One drone's link cut for 5 s mid-replay and restored, discovery without multicast (fastdds_peers.xml,
   the MULTICAST flag of every interface off, no multicast discovery port bound on any host): nothing
   crashes, every frame gets tracks, the fused views say which view was missing and why, and the drone is
-  back within 2 frames of its link returning.
+  back within 2 frames of its link returning; no traffic between the two drones crossed a link.
 - One drone's link throttled below its image rate, and the ground's fuse process restarted mid-run
   (multicast discovery): latency stays bounded (the link's queue drops at the sender, nothing queues
   without end), and the restarted fuse resumes with fresh tracks.
@@ -51,7 +51,7 @@ def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
     d = deployment(settings, BagFacts.read(str(bag), VIEWS))
     logs = tmp_path / 'logs'
     with Hosts(VIEWS, multicast=False) as hosts:
-        procs = start(d, hosts, logs, discovery='peers', image_probes=[CUT])
+        procs = start(d, hosts, logs, discovery='peers', image_probes=[CUT], captures=['D1'])
         fused = lambda: {line['stamp']: line for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
                          if line['kind'] == 'fuse'}
         _wait(lambda: _stamp(2) in fused(), 240, 'frame 2 fused (start-up and discovery)', procs)
@@ -79,6 +79,10 @@ def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
     domain = int(os.environ.get('ROS_DOMAIN_ID', '0'))
     assert not any(7400 + 250 * domain in p for p in ports.values()), ports   # RTPS well-known ports
     assert 7400 + 250 * domain + 10 in ports['ground'], ports   # the unicast discovery of participant 0
+    # the drones announce themselves to the ground only: no drone found another, nothing crossed between them
+    crossed = read_probe(logs / 'D1_capture.log')[-1]['streams']
+    assert any(r['peer'] == 'ground' and r['stream'] == '/D1/image/compressed' for r in crossed), crossed
+    assert not [r for r in crossed if r['peer'] == CUT], crossed
 
     lines = read_probe(logs / 'ground_probe.log')
     tracks = [line['stamp'] for line in lines if line['kind'] == 'tracks']
