@@ -29,6 +29,7 @@ VIEWS, CUT = ['D1', 'D5'], 'D5'
 FRAMES = 14          # back and forth over the sample's 5 frames
 RATE = 0.5           # 1 s per frame: calib, register and fuse keep up on two loaded cores
 PERIOD = 0.5 / RATE  # wall seconds between frames
+LEAD = 30.0          # s from all hosts ready to the first frame: players took over 13 s to start at load 50
 
 
 def _stamp(k: int) -> float:
@@ -51,7 +52,8 @@ def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
     d = deployment(settings, BagFacts.read(str(bag), VIEWS))
     logs = tmp_path / 'logs'
     with Hosts(VIEWS, multicast=False) as hosts:
-        procs = start(d, hosts, logs, discovery='peers', image_probes=[CUT], captures=['D1'])
+        procs = start(d, hosts, logs, discovery='peers', image_probes=[CUT], captures=['D1'],
+                      player_lead_s=LEAD)
         fused = lambda: {line['stamp']: line for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
                          if line['kind'] == 'fuse'}
         _wait(lambda: _stamp(2) in fused(), 240, 'frame 2 fused (start-up and discovery)', procs)
@@ -118,7 +120,8 @@ def test_throttled_link_and_fuse_restarted(matrix_sample, tmp_path):
     logs, other = tmp_path / 'logs', next(v for v in VIEWS if v != slow)
     with Hosts(VIEWS) as hosts:
         hosts.limit(slow, rate_mbit)
-        procs = start(d, hosts, logs, discovery='multicast', image_probes=[other])
+        procs = start(d, hosts, logs, discovery='multicast', image_probes=[other],
+                      player_lead_s=LEAD)
         fused = lambda: {line['stamp'] for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
                          if line['kind'] == 'fuse'}
         _wait(lambda: _stamp(3) in fused(), 240, 'frame 3 fused', procs)
@@ -173,7 +176,8 @@ def test_discovery_server_without_multicast(matrix_sample, tmp_path):
     d = deployment(settings, BagFacts.read(str(bag), VIEWS))
     logs = tmp_path / 'logs'
     with Hosts(VIEWS, multicast=False) as hosts:
-        procs = start(d, hosts, logs, discovery='server', image_probes=VIEWS, captures=[watched])
+        procs = start(d, hosts, logs, discovery='server', image_probes=VIEWS, captures=[watched],
+                      player_lead_s=LEAD)
         fused = lambda: {line['stamp'] for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
                          if line['kind'] == 'fuse'}
         players = {label: p for label, p in procs.items() if label.endswith('bag_player')}
