@@ -5,10 +5,12 @@ and fuse (on the ground) over DDS across the links; no namespace or process is l
 - One drone's link cut for 5 s mid-replay and restored, discovery without multicast (fastdds_peers.xml,
   the MULTICAST flag of every interface off, no multicast discovery port bound on any host): nothing
   crashes, every frame gets tracks, the fused views say which view was missing and why, and the drone is
-  back within 2 frames of its link returning.
+  back within 2 frames of its link returning; no traffic between the two drones crossed a link.
 - One drone's link throttled below its image rate, and the ground's fuse process restarted mid-run
   (multicast discovery): latency stays bounded (the link's queue drops at the sender, nothing queues
-  without end), and the restarted fuse resumes with fresh tracks."""
+  without end), and the restarted fuse resumes with fresh tracks.
+- Discovery through a server on the ground (fastdds_client.xml, no multicast): every frame gets tracks from
+  both drones, and what crosses a drone's link is its own streams and discovery, nothing of the other's."""
 
 import os
 import time
@@ -16,7 +18,7 @@ import time
 import pytest
 
 from matrix_bringup.deployment import deployment
-from matrix_bringup.distributed import back_and_forth, read_probe, restart, start, write_replay_bag
+from matrix_bringup.distributed import SERVER_PORT, back_and_forth, read_probe, restart, start, write_replay_bag
 from matrix_bringup.graph import BagFacts, GraphSettings
 from matrix_bringup.netns_harness import Hosts, namespaces, unavailable
 
@@ -27,6 +29,7 @@ VIEWS, CUT = ['D1', 'D5'], 'D5'
 FRAMES = 14          # back and forth over the sample's 5 frames
 RATE = 0.5           # 1 s per frame: calib, register and fuse keep up on two loaded cores
 PERIOD = 0.5 / RATE  # wall seconds between frames
+LEAD = 30.0          # s from all hosts ready to the first frame: players took over 13 s to start at load 50
 
 
 def _stamp(k: int) -> float:
@@ -49,7 +52,8 @@ def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
     d = deployment(settings, BagFacts.read(str(bag), VIEWS))
     logs = tmp_path / 'logs'
     with Hosts(VIEWS, multicast=False) as hosts:
-        procs = start(d, hosts, logs, discovery='peers', image_probes=[CUT])
+        procs = start(d, hosts, logs, discovery='peers', image_probes=[CUT], captures=['D1'],
+                      player_lead_s=LEAD)
         fused = lambda: {line['stamp']: line for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
                          if line['kind'] == 'fuse'}
         _wait(lambda: _stamp(2) in fused(), 240, 'frame 2 fused (start-up and discovery)', procs)
@@ -77,6 +81,10 @@ def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
     domain = int(os.environ.get('ROS_DOMAIN_ID', '0'))
     assert not any(7400 + 250 * domain in p for p in ports.values()), ports   # RTPS well-known ports
     assert 7400 + 250 * domain + 10 in ports['ground'], ports   # the unicast discovery of participant 0
+    # the drones announce themselves to the ground only: no drone found another, nothing crossed between them
+    crossed = read_probe(logs / 'D1_capture.log')[-1]['streams']
+    assert any(r['peer'] == 'ground' and r['stream'] == '/D1/image/compressed' for r in crossed), crossed
+    assert not [r for r in crossed if r['peer'] == CUT], crossed
 
     lines = read_probe(logs / 'ground_probe.log')
     tracks = [line['stamp'] for line in lines if line['kind'] == 'tracks']
@@ -112,7 +120,8 @@ def test_throttled_link_and_fuse_restarted(matrix_sample, tmp_path):
     logs, other = tmp_path / 'logs', next(v for v in VIEWS if v != slow)
     with Hosts(VIEWS) as hosts:
         hosts.limit(slow, rate_mbit)
-        procs = start(d, hosts, logs, discovery='multicast', image_probes=[other])
+        procs = start(d, hosts, logs, discovery='multicast', image_probes=[other],
+                      player_lead_s=LEAD)
         fused = lambda: {line['stamp'] for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
                          if line['kind'] == 'fuse'}
         _wait(lambda: _stamp(3) in fused(), 240, 'frame 3 fused', procs)
@@ -157,3 +166,51 @@ def test_throttled_link_and_fuse_restarted(matrix_sample, tmp_path):
     assert resumed_ids and min(resumed_ids) == 1, [tracks[s]['ids'] for s in after]
     # (its first frame may have no image: they left before its image subscriptions matched)
     assert all(status[s]['views_used'] >= 1 for s in after[1:]), [status[s] for s in after]
+
+
+def test_discovery_server_without_multicast(matrix_sample, tmp_path):
+    frames, watched, other = 10, 'D1', 'D5'
+    bag = write_replay_bag(matrix_sample, tmp_path / 'bag', VIEWS, back_and_forth(5, frames))
+    settings = GraphSettings(bag=str(bag), dataset=str(matrix_sample), views=VIEWS, lockstep=False, rate=RATE,
+                             sync_timeout=1.5)
+    d = deployment(settings, BagFacts.read(str(bag), VIEWS))
+    logs = tmp_path / 'logs'
+    with Hosts(VIEWS, multicast=False) as hosts:
+        procs = start(d, hosts, logs, discovery='server', image_probes=VIEWS, captures=[watched],
+                      player_lead_s=LEAD)
+        fused = lambda: {line['stamp'] for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
+                         if line['kind'] == 'fuse'}
+        players = {label: p for label, p in procs.items() if label.endswith('bag_player')}
+        _wait(lambda: all(p.poll() is not None for p in players.values()), 240, 'the players to finish', procs)
+        _wait(lambda: _stamp(frames - 1) in fused(), 30, 'the last frame fused', procs)
+        ports = {h: hosts.udp_ports(h) for h in hosts.hosts}
+        alive = {label: p.poll() for label, p in procs.items() if label not in players}
+        hosts.stop_all()
+        tag = hosts.tag
+    logs_text = {p.name: p.read_text() for p in logs.glob('*.log')}
+    assert all(code is None for code in alive.values()), alive
+    assert all(p.returncode == 0 for p in players.values()), logs_text
+    assert not any('Traceback' in text for text in logs_text.values()), logs_text
+    assert namespaces(owner_pid=int(tag[3:])) == []
+
+    domain = int(os.environ.get('ROS_DOMAIN_ID', '0'))
+    assert SERVER_PORT in ports['ground'], ports   # the server listens on the ground ...
+    assert not any(7400 + 250 * domain in p for p in ports.values()), ports   # ... and nobody on multicast
+    lines = read_probe(logs / 'ground_probe.log')
+    tracks = [line['stamp'] for line in lines if line['kind'] == 'tracks']
+    status = {line['stamp']: line for line in lines if line['kind'] == 'fuse'}
+    stamps = [_stamp(k) for k in range(frames)]
+    assert sorted(tracks) == stamps and tracks == sorted(tracks), tracks   # every frame once, in order
+    # both drones found through the server: the images each published reached fuse (most of them: on a loaded
+    # machine one may come after its sync timeout; frames also miss homographies computed too late)
+    for view in VIEWS:
+        published = {line['stamp'] for line in read_probe(logs / f'{view}_probe.log') if line['kind'] == 'image'}
+        arrived = [s for s in published if 'no image' not in status[s]['missing'].get(view, '')]
+        assert published and len(arrived) >= len(published) / 2, (view, published, status)
+    # D1's link: its images and geometry go up to the ground; none of D5's streams crosses it either way
+    crossed = read_probe(logs / f'{watched}_capture.log')[-1]['streams']
+    up = {(r['stream'], r['kind']) for r in crossed if r['direction'] == 'up' and r['peer'] == 'ground'}
+    assert {('/D1/image/compressed', 'data'), ('/D1/homography', 'data')} <= up, crossed
+    assert not [r for r in crossed if r['stream'].startswith(f'/{other}/')], crossed
+    assert not [r for r in crossed if r['direction'] == 'down' and r['kind'] == 'data'
+                and r['stream'].endswith('image/compressed')], crossed

@@ -5,7 +5,10 @@ replay bag such a run plays. Used by tests/system/test_distributed.py and script
 Discovery (``DISCOVERY``): ``multicast``: Fast DDS's default SIMPLE discovery over the links
 (``ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET``; the default ``LOCALHOST`` of this workspace would never leave a
 host) with config/fastdds_hosts.xml; ``peers``: config/fastdds_peers.xml, unicast to a fixed list of peers, no
-multicast at all (for links that do not pass it).
+multicast at all (for links that do not pass it); ``server``: a discovery server on the ground
+(``matrix_bringup.discovery_server``, started first) and every other process its client by
+config/fastdds_client.xml, no multicast either; ``server_env``: the same server, the clients made by Fast DDS
+from ``ROS_DISCOVERY_SERVER`` with config/fastdds_hosts.xml (the other way to set it up).
 """
 
 import os
@@ -16,19 +19,26 @@ from pathlib import Path
 
 from matrix_bringup.deployment import GROUND, Deployment
 from matrix_bringup.graph import share_file
-from matrix_bringup.netns_harness import Hosts
+from matrix_bringup.netns_harness import Hosts, address
 from matrix_bringup.run_graph import executable_path
 
-# name -> (profile under share/matrix_bringup/config, ROS_AUTOMATIC_DISCOVERY_RANGE)
-DISCOVERY = {'multicast': ('fastdds_hosts.xml', 'SUBNET'), 'peers': ('fastdds_peers.xml', 'SYSTEM_DEFAULT')}
+SERVER_PORT = 11811   # of the discovery server (config/fastdds_server.xml, fastdds_client.xml)
+# name -> (profile under share/matrix_bringup/config, ROS_AUTOMATIC_DISCOVERY_RANGE, other variables)
+DISCOVERY = {'multicast': ('fastdds_hosts.xml', 'SUBNET', {}),
+             'peers': ('fastdds_peers.xml', 'SYSTEM_DEFAULT', {}),
+             'server': ('fastdds_client.xml', 'SYSTEM_DEFAULT', {}),
+             'server_env': ('fastdds_hosts.xml', 'SYSTEM_DEFAULT',
+                            {'ROS_DISCOVERY_SERVER': f'{address(GROUND)}:{SERVER_PORT}'})}
+SERVED = ('server', 'server_env')   # discovery modes that need matrix_bringup.discovery_server on the ground
 
 
 def host_env(discovery: str = 'multicast') -> dict:
     """The environment of every process of a distributed run (ROS_DOMAIN_ID as this process's)."""
-    profile, scope = DISCOVERY[discovery]
-    env = {k: v for k, v in os.environ.items() if k not in ('ROS_STATIC_PEERS', 'ROS_LOCALHOST_ONLY')}
+    profile, scope, extra = DISCOVERY[discovery]
+    env = {k: v for k, v in os.environ.items()
+           if k not in ('ROS_STATIC_PEERS', 'ROS_LOCALHOST_ONLY', 'ROS_DISCOVERY_SERVER')}
     env.update({'ROS_AUTOMATIC_DISCOVERY_RANGE': scope,
-                'FASTRTPS_DEFAULT_PROFILES_FILE': share_file('matrix_bringup', 'config', profile)})
+                'FASTRTPS_DEFAULT_PROFILES_FILE': share_file('matrix_bringup', 'config', profile), **extra})
     return env
 
 
@@ -36,10 +46,12 @@ def log_path(log_dir: Path, label: str) -> Path:
     return Path(log_dir) / (label.replace('/', '_') + '.log')
 
 
-def start(d: Deployment, hosts: Hosts, log_dir: Path, discovery: str = 'multicast', image_probes=(),
+def start(d: Deployment, hosts: Hosts, log_dir: Path, discovery: str = 'multicast', image_probes=(), captures=(),
           player_lead_s: float = 10.0, timeout_s: float = 300.0) -> dict:
-    """Start a ``link_probe`` of fuse's output on the ground (label 'ground/probe'), one of the images on each
-    drone of ``image_probes`` ('Dn/probe'; its player then waits for that reader too), then the deployment's
+    """Start the discovery server on the ground if ``discovery`` needs one ('ground/discovery_server'), a
+    ``link_probe`` of fuse's output on the ground (label 'ground/probe'), one of the images on each
+    drone of ``image_probes`` ('Dn/probe'; its player then waits for that reader too), a ``link_capture`` of
+    the link of each drone of ``captures`` ('Dn/capture', before any DDS traffic), then the deployment's
     processes in their hosts, the ground first. The players come last, once fuse has every drone's geometry
     stream connected (``timeout_s``), all with the same ``start_at``, ``player_lead_s`` from then: frame k
     leaves every drone host at the same time, as from cameras on a common clock. Returns label -> Popen;
@@ -49,6 +61,13 @@ def start(d: Deployment, hosts: Hosts, log_dir: Path, discovery: str = 'multicas
     def run(host, label, cmd):
         procs[label] = hosts.start(host, cmd, log_path(log_dir, label), env)
 
+    for view in captures:
+        names = [f'{h}={hosts.address(h)}' for h in hosts.hosts]
+        run(view, f'{view}/capture', [sys.executable, '-m', 'matrix_bringup.link_capture', '--hosts', *names])
+    _wait(lambda: all(read_probe(log_path(log_dir, f'{v}/capture')) for v in captures), procs, 60.0,
+          'the link captures to start')
+    if discovery in SERVED:   # before its clients: they announce themselves to it only
+        run(GROUND, 'ground/discovery_server', [sys.executable, '-m', 'matrix_bringup.discovery_server'])
     probe = [sys.executable, '-m', 'matrix_bringup.link_probe']
     run(GROUND, 'ground/probe', [*probe, '--fuse'])
     for view in image_probes:
@@ -82,17 +101,21 @@ def restart(d: Deployment, hosts: Hosts, log_dir: Path, label: str, discovery: s
 
 def _wait_connected(procs: dict, fuse_log: Path, drones: int, timeout_s: float) -> None:
     """Until fuse logged that every drone's geometry stream connected (its images are then subscribed)."""
+    _wait(lambda: Path(fuse_log).read_text().count('connected; images subscribed') >= drones, procs, timeout_s,
+          f'fuse to connect to all {drones} drones ({fuse_log})')
+
+
+def _wait(condition, procs: dict, timeout_s: float, what: str) -> None:
     deadline = time.monotonic() + timeout_s
-    while Path(fuse_log).read_text().count('connected; images subscribed') < drones:
+    while not condition():
         dead = {label: p.returncode for label, p in procs.items() if p.poll() is not None}
         if dead or time.monotonic() > deadline:
-            raise RuntimeError(f'fuse did not connect to all {drones} drones ({fuse_log}); '
-                               + (f'exited: {dead}' if dead else f'after {timeout_s:g} s'))
+            raise RuntimeError(f'waited for {what}: ' + (f'exited: {dead}' if dead else f'not after {timeout_s:g} s'))
         time.sleep(0.2)
 
 
 def read_probe(log: Path) -> list:
-    """The JSON lines a probe wrote so far (its first line is its command)."""
+    """The JSON lines a probe or a capture wrote so far (its first line is its command)."""
     import json
     lines = Path(log).read_text().splitlines()[1:] if Path(log).is_file() else []
     out = []
