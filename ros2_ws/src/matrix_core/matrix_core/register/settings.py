@@ -69,7 +69,7 @@ class RegisterSettings:
                 'frames between anchors follow the previous frame by optical flow on its ground corners, '
                 'chained to its registration; anchors (full registrations) on the first frame, every '
                 'reanchor_every frames, after a failure and when the chain is doubted'})
-    reanchor_every: int = field(default=20, metadata={
+    reanchor_every: int = field(default=10, metadata={
         'help': 'mode track: a full registration every this many frames (1 = every frame; 0 = only on the '
                 'first frame, after failures and when the chain is doubted)'})
     track_corners: int = field(default=2000, metadata={
