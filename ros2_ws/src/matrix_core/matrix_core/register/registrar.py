@@ -5,9 +5,9 @@ whenever the chained registration is weak, and takes over again when it register
 accumulate error; the reference does not).
 
 Mode ``track`` (:mod:`matrix_core.register.flow_tracking`): frames between anchors are registered by optical
-flow from the previous frame, chained to its registration; an anchor is a full registration as above, made on
-the first frame, every ``reanchor_every`` frames, after a failure, and whenever the chain is doubted (too few
-flow inliers, or the sanity gate rejects the chained homography)."""
+flow from the previous frame, refined against the anchor and chained to the anchor's registration; an anchor is a
+full registration as above, made on the first frame, every ``reanchor_every`` frames, after a failure, and
+whenever the chain is doubted (too few flow inliers, or the sanity gate rejects the chained homography)."""
 
 import time
 from dataclasses import replace
@@ -82,7 +82,7 @@ class Registrar:
         if self.settings.mode != 'track':
             return self._register_full(image, frame_id, start)
         gray = self.tracker.reduce(image)
-        tracked, why = self._flow(gray, frame_id, start)
+        tracked, why = self._flow(gray, start)
         if tracked is not None:
             return tracked
         result = self._register_full(image, frame_id, start)
@@ -112,7 +112,7 @@ class Registrar:
             result = replace(result, message=message)
         return replace(result, seconds=time.perf_counter() - start)
 
-    def _flow(self, gray: np.ndarray, frame_id, start) -> tuple:
+    def _flow(self, gray: np.ndarray, start) -> tuple:
         """(tracked Registration, '') when the flow from the previous frame holds, else (None, why it
         does not: the reason of the anchor that follows)."""
         s, state = self.settings, self._track
