@@ -67,15 +67,17 @@ class RegisterSettings:
     mode: str = field(default='reference', metadata={
         'help': "reference: every frame registered to the reference by features (the paper's way); track: "
                 'frames between anchors follow the previous frame by optical flow on its ground corners, '
-                'chained to its registration; anchors (full registrations) on the first frame, every '
-                'reanchor_every frames, after a failure and when the chain is doubted'})
+                "refined against the anchor's corners (register/flow_tracking.py); anchors (full "
+                'registrations) on the first frame, every reanchor_every frames, after a failure and when the '
+                'chain is doubted'})
     reanchor_every: int = field(default=10, metadata={
         'help': 'mode track: a full registration every this many frames (1 = every frame; 0 = only on the '
                 'first frame, after failures and when the chain is doubted)'})
     track_corners: int = field(default=2000, metadata={
-        'help': 'mode track: corners detected per registered frame at the reduced scale, before the ground mask'})
+        'help': 'mode track: corners detected on each anchor at the reduced scale, before the ground mask'})
     track_min_inliers: int = field(default=40, metadata={
-        'help': 'mode track: a flow step with fewer homography inliers doubts the chain (a full registration follows)'})
+        'help': 'mode track: a frame whose refinement against the anchor has fewer inliers doubts the chain '
+                '(a full registration follows)'})
     seed: int = field(default=0, metadata={
         'help': 'random seed of the ransac estimator: the same seed repeats its homographies, other seeds '
                 'draw other samples (magsac is deterministic and ignores it)'})
