@@ -6,13 +6,16 @@ In deployment each drone has its own computer running its calib and register nod
 both cores (matrix_core.calib.DroneCalibrator, matrix_core.register.Registrar, default settings, one
 OpenCV / torch thread; each frame registered first, and its registration guiding the calibration, as in the
 graph) frame after frame for every drone of a MATRIX folder and prints per folder the
-time per frame of each and of both (median, mean, p95, max) and whether the mean keeps up.
+CPU time per frame (time.process_time, one thread) of each and of both (median, mean, p95, max) and whether
+the mean keeps up; registration ``--mode track`` (optical flow between anchors, see
+matrix_core.register.flow_tracking) says how many frames were tracked.
 
     python scripts/bench_drone.py                                   # real sample + simulated complex 1080p
     python scripts/bench_drone.py --dataset DIR [--dataset DIR2 ..]  # MATRIX folders with reference/
     python scripts/bench_drone.py --sim-frames 0                     # real sample only
     python scripts/bench_drone.py --no-registration-prior            # calib measures the image motion itself
     python scripts/bench_drone.py --track_corners true               # any CalibSettings flag
+    python scripts/bench_drone.py --mode track --reanchor_every 10   # registration that tracks
 """
 
 import argparse
@@ -45,12 +48,14 @@ def _figures(ms: np.ndarray) -> str:
             f'max {ms.max():.0f}')
 
 
-def bench(root: Path, calib_settings: CalibSettings, registration_prior: bool) -> bool:
+def bench(root: Path, calib_settings: CalibSettings, registration_prior: bool,
+          register_settings: RegisterSettings) -> bool:
     """Run every drone of ``root``; prints the figures, returns whether the mean keeps up with 2 Hz."""
     dataset = MatrixDataset(root)
     scene = load_scene(str(config_for_dataset(root)))
-    register_settings, _ = settings_for_dataset(RegisterSettings(), dataset)
+    register_settings, _ = settings_for_dataset(register_settings, dataset)
     calib_ms, register_ms, ok, tracked, registered, rot, centre = [], [], 0, 0, 0, [], []
+    flow_frames = 0
     with tqdm(total=len(dataset.views) * len(dataset.frames), desc=root.name, unit='image', leave=False) as bar:
         for view in dataset.views:
             reference = dataset.reference_image(view)
@@ -59,13 +64,14 @@ def bench(root: Path, calib_settings: CalibSettings, registration_prior: bool) -
                                   f'{view}/reference')
             for index, frame in enumerate(dataset.frames):
                 image = dataset.load_image(view, frame)
-                t = time.perf_counter()
+                t = time.process_time()
                 r = registrar.register(image, frame)
-                register_ms.append(1000 * (time.perf_counter() - t))
+                register_ms.append(1000 * (time.process_time() - t))
+                flow_frames += r.message.startswith('tracked')
                 guide = r if registration_prior else None
-                t = time.perf_counter()
+                t = time.process_time()
                 c = calibrator.process(image, PERIOD_S * index, guide)
-                calib_ms.append(1000 * (time.perf_counter() - t))
+                calib_ms.append(1000 * (time.process_time() - t))
                 if c.status == OK:
                     rot.append(rotation_angle_deg(c.camera.R, dataset.camera(view, frame).R))
                     centre.append(float(np.linalg.norm(c.camera.center - dataset.camera(view, frame).center)))
@@ -75,11 +81,12 @@ def bench(root: Path, calib_settings: CalibSettings, registration_prior: bool) -
     both = calib_ms + register_ms
     keeps_up = both.mean() <= 1000 * PERIOD_S
     print(f'{root}: {len(dataset.views)} drones x {len(dataset.frames)} frames, '
-          f'{dataset.reference_camera(dataset.views[0]).width}x{dataset.reference_camera(dataset.views[0]).height}\n'
+          f'{dataset.reference_camera(dataset.views[0]).width}x{dataset.reference_camera(dataset.views[0]).height}, CPU time\n'
           f'  calib     {_figures(calib_ms)} (ok {ok}, of them tracked {tracked}, of {len(both)}; vs the stored '
           f'calibration: rotation median {np.median(rot or [np.nan]):.3f} / max {max(rot, default=np.nan):.3f} deg, centre median '
           f'{100 * np.median(centre or [np.nan]):.1f} / max {100 * max(centre, default=np.nan):.1f} cm)\n'
-          f'  register  {_figures(register_ms)} (registered {registered} of {len(both)})\n'
+          f'  register  {_figures(register_ms)} (mode {register_settings.mode}: registered {registered} of '
+          f'{len(both)}, of them by flow {flow_frames})\n'
           f'  both      {_figures(both)}: {"keeps" if keeps_up else "does NOT keep"} up with 2 Hz on one core '
           f'(mean <= {1000 * PERIOD_S:.0f} ms); frames over 500 ms: {int((both > 1000 * PERIOD_S).sum())}',
           flush=True)
@@ -98,9 +105,15 @@ def main() -> int:
     parser.add_argument('--registration-prior', action=argparse.BooleanOptionalAction, default=True,
                         help="calib's board prediction from the frame's registration, as the graph runs it (calib "
                         'node use_registration:=true); --no-registration-prior: from the image motion')
+    defaults = RegisterSettings()
+    parser.add_argument('--mode', choices=['reference', 'track'], default=defaults.mode,
+                        help='registration mode (RegisterSettings.mode)')
+    parser.add_argument('--reanchor_every', type=int, default=defaults.reanchor_every,
+                        help='mode track: full registration every this many frames (RegisterSettings.reanchor_every)')
     add_settings_arguments(parser, CalibSettings)   # e.g. --track_corners true; the config follows each folder
     args = parser.parse_args()
     calib_settings = settings_from_namespace(CalibSettings, args)
+    register_settings = RegisterSettings(mode=args.mode, reanchor_every=args.reanchor_every)
     cv2.setNumThreads(1)
     import torch
     torch.set_num_threads(1)
@@ -110,7 +123,7 @@ def main() -> int:
         for variant in args.sim_variants if args.sim_frames else []:
             folders.append(simulated_sequence(variant, args.sim_frames, 7, Path(tmp) / f'sim_{variant}'))
         for folder in folders:
-            bench(folder, calib_settings, args.registration_prior)   # prints its verdict; a missed target is a figure, not an error of `make bench`
+            bench(folder, calib_settings, args.registration_prior, register_settings)   # prints its verdict; a missed target is a figure, not an error of `make bench`
     return 0
 
 

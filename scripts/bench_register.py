@@ -10,12 +10,15 @@ features are extracted once and cached, as in the node). Error: mean over visibl
     python scripts/bench_register.py                      # all backends at 1920x1080, 960x540, 480x270
     python scripts/bench_register.py --backends sift --scales 0.25 0.5
     python scripts/bench_register.py --simulated          # full-size simulated acceptance (see below)
+    python scripts/bench_register.py --backends sift --scales 0.25 --mode track   # registration that tracks
 
 ``--simulated``: the acceptance on simulated sequences with the default settings: each variant (simple,
 complex, modified) rendered at 1920x1080, 50 frames, seed 3 (kept in ``--sim-dir`` and reused), all 8 drones
 x 50 frames registered to their reference/; prints pairs, failures, time and error median / max (criteria:
 every pair registered, median <= 0.5 px, worst <= 3 px). About 25 s of rendering and 40 s of registration
-per variant on one core. tests/register/test_sim_acceptance.py is its CI-sized version.
+per variant on one core. tests/register/test_sim_acceptance.py is its CI-sized version. ``--mode track``
+(with ``--reanchor_every``) runs the registration that tracks (each drone's frames in order) and adds
+the CPU time per frame (median, p95) and how many frames the flow registered.
 """
 
 import argparse
@@ -49,26 +52,31 @@ def feature_budget(backend: str, scale: float, kornia_features: int) -> tuple:
     return 16000, 32000
 
 
-def bench(dataset, backend, scale, pairs, kornia_features) -> dict:
+def bench(dataset, backend, scale, pairs, kornia_features, mode='reference', reanchor_every=10) -> dict:
     current, reference = feature_budget(backend, scale, kornia_features)
     settings = RegisterSettings(backend=backend, scale=scale, max_features=current,
-                                reference_max_features=reference)
+                                reference_max_features=reference, mode=mode, reanchor_every=reanchor_every)
     rows, registrars = [], {}
     for view, frame in tqdm(pairs, desc=f'{backend} @ {scale:g}', unit='pair', leave=False):
         if view not in registrars:
             ref_image = dataset.reference_image(view)
             registrars[view] = Registrar(settings, ref_image, dataset.reference_camera(view), dataset.area,
                                          f'{view}/reference')
-        r = registrars[view].register(dataset.load_image(view, frame), frame)
+        image = dataset.load_image(view, frame)
+        start = time.process_time()
+        r = registrars[view].register(image, frame)
+        cpu = time.process_time() - start
         err = (homography_error_px(r.ref_H_img, dataset.camera(view, frame), dataset.reference_camera(view),
                                    dataset.area, settings.exclude_boxes) if r.ok else float('nan'))
-        rows.append((r.seconds, r.matches, r.inliers, r.confidence, err, r.ok))
+        rows.append((r.seconds, r.matches, r.inliers, r.confidence, err, r.ok, cpu, r.message.startswith('tracked')))
     a = np.array(rows, dtype=float)
     ok = a[:, 5] > 0
     return {'backend': backend, 'size': f'{round(1920 * scale)}x{round(1080 * scale)}', 'pairs': len(rows),
             'features': current,
             'failed': int((~ok).sum()), 'ms_median': 1000 * float(np.median(a[:, 0])),
-            'ms_max': 1000 * float(np.max(a[:, 0])), 'matches': float(np.median(a[:, 1])),
+            'ms_max': 1000 * float(np.max(a[:, 0])), 'cpu_ms_median': 1000 * float(np.median(a[:, 6])),
+            'cpu_ms_p95': 1000 * float(np.percentile(a[:, 6], 95)), 'tracked': int(a[:, 7].sum()),
+            'matches': float(np.median(a[:, 1])),
             'inliers': float(np.median(a[:, 2])), 'confidence': float(np.median(a[:, 3])),
             'err_median_px': float(np.median(a[ok, 4])) if ok.any() else float('nan'),
             'err_max_px': float(np.max(a[ok, 4])) if ok.any() else float('nan')}
@@ -85,14 +93,17 @@ def simulated_acceptance(args) -> int:
         if not (folder / 'matrix_tracker_meta.json').is_file():
             simulate(SimulateSettings(config=variant, frames=args.sim_frames, seed=args.sim_seed, out=str(folder),
                                       width=args.sim_size[0], height=args.sim_size[1]))
-        run = acceptance_run(MatrixDataset(folder), progress=True)
+        run = acceptance_run(MatrixDataset(folder), RegisterSettings(mode=args.mode, reanchor_every=args.reanchor_every),
+                             progress=True)
+        cpu = 1000 * np.array(run['cpu_seconds'])
         ok = run['pairs'] - len(run['failed'])
         met = not run['failed'] and run['error_px_median'] <= 0.5 and run['error_px_max'] <= 3.0
         missed += not met
         print(f"{variant:9s} {run['width']}px  registered {ok}/{run['pairs']}  "
               f"time {1000 * run['seconds_median']:4.0f} ms  error median {run['error_px_median']:.2f} px "
               f"max {run['error_px_max']:.2f} px (full-res-equivalent)  "
-              f"{'meets' if met else 'MISSES'} the criteria", flush=True)
+              f"{'meets' if met else 'MISSES'} the criteria; mode {args.mode}: CPU median {np.median(cpu):.0f} ms, "
+              f"p95 {np.percentile(cpu, 95):.0f} ms, by flow {run['tracked']}", flush=True)
         for pair, reason in run['failed'].items():
             print(f'  failed {pair}: {reason}')
     return int(missed > 0)
@@ -115,6 +126,10 @@ def main(argv=None) -> int:
     parser.add_argument('--sim-frames', type=int, default=50)
     parser.add_argument('--sim-seed', type=int, default=3)
     parser.add_argument('--sim-size', type=int, nargs=2, default=[1920, 1080], metavar=('W', 'H'))
+    parser.add_argument('--mode', choices=['reference', 'track'], default=RegisterSettings().mode,
+                        help='registration mode (RegisterSettings.mode)')
+    parser.add_argument('--reanchor_every', type=int, default=RegisterSettings().reanchor_every,
+                        help='mode track: full registration every this many frames')
     args = parser.parse_args(argv)
 
     cv2.setNumThreads(1)
@@ -135,7 +150,8 @@ def main(argv=None) -> int:
             pairs = [all_pairs[(i * step + 2 * i) % len(all_pairs)] for i in range(args.kornia_pairs)]
         for scale in args.scales:
             try:
-                table.append(bench(dataset, backend, scale, pairs, args.kornia_features))
+                table.append(bench(dataset, backend, scale, pairs, args.kornia_features, args.mode,
+                                   args.reanchor_every))
             except MissingWeightsError as exc:
                 print(f'{backend}: skipped: {exc}', file=sys.stderr)
                 break
@@ -143,7 +159,8 @@ def main(argv=None) -> int:
             print(f"{row['backend']:22s} {row['size']:>9s} feat {row['features']:5d} pairs {row['pairs']:2d} failed {row['failed']:2d}  "
                   f"time {row['ms_median']:7.0f} ms (max {row['ms_max']:6.0f})  matches {row['matches']:5.0f}  "
                   f"inliers {row['inliers']:5.0f}  c {row['confidence']:.2f}  error median {row['err_median_px']:.2f} px "
-                  f"max {row['err_max_px']:.2f} px", flush=True)
+                  f"max {row['err_max_px']:.2f} px  CPU median {row['cpu_ms_median']:.0f} ms p95 {row['cpu_ms_p95']:.0f} "
+                  f"by flow {row['tracked']}", flush=True)
     if args.json:
         Path(args.json).write_text(json.dumps(table, indent=1))
     return 0

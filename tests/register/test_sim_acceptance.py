@@ -15,6 +15,7 @@ import pytest
 
 from matrix_core.datasets import MatrixDataset
 from matrix_core.register.acceptance import acceptance_run
+from matrix_core.register.settings import RegisterSettings
 from matrix_core.sim.sequence import simulate
 from matrix_core.sim.settings import SimulateSettings
 
@@ -54,3 +55,19 @@ def test_simulated_sequence_meets_the_acceptance(variant, sequences):
     assert run['error_px_max'] <= 3.0, figures
     # The scene came from the dataset: the simple variant has no block, the others block + 2 pillars.
     assert len(run['settings'].exclude_boxes) == (0 if variant == 'simple' else 15)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize('variant', ['complex'])
+def test_registration_that_tracks_meets_the_acceptance(variant, sequences):
+    """Mode track on the same sequence: frames between anchors by optical flow, same criteria on every frame."""
+    cv2.setNumThreads(1)
+    run = acceptance_run(sequences(variant), RegisterSettings(mode='track'), views=VIEWS[variant])
+    figures = (f"{variant} track: {run['pairs'] - len(run['failed'])}/{run['pairs']} registered, "
+               f"{run['tracked']} by flow, error median {run['error_px_median']:.2f} / max "
+               f"{run['error_px_max']:.2f} full-res-equivalent px")
+    print(figures)
+    assert not run['failed'] and run['pairs'] == 2 * FRAMES, f"{figures}; failed: {run['failed']}"
+    assert run['tracked'] >= FRAMES, figures  # most frames by flow, not by features
+    assert run['error_px_median'] <= 0.5, figures
+    assert run['error_px_max'] <= 3.0, figures

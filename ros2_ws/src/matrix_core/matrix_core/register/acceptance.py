@@ -7,6 +7,7 @@ same full-resolution inlier threshold, and their errors are reported in FULL-RES
 the same at every size.
 """
 
+import time
 from dataclasses import replace
 
 import numpy as np
@@ -35,6 +36,7 @@ def acceptance_run(dataset, settings: RegisterSettings = None, views=None, frame
 
     Returns a dict: ``pairs``, ``failed`` ({'D1/7': reason}), ``errors_px`` (list, full-resolution-equivalent
     pixels, registered pairs only), ``error_px_median``, ``error_px_max``, ``seconds_median`` (per pair),
+    ``cpu_seconds`` (list: CPU time of each pair's registration), ``tracked`` (pairs registered by flow, mode track),
     ``width`` (of the folder's images), ``settings`` (as used, after :func:`settings_for_width` and the
     dataset's own scene, see :mod:`matrix_core.register.scene`).
     """
@@ -45,15 +47,19 @@ def acceptance_run(dataset, settings: RegisterSettings = None, views=None, frame
     settings, _ = settings_for_dataset(settings, dataset)
     backend = make_backend(settings)
     factor = FULL_WIDTH / width
-    failed, errors, seconds = {}, [], []
+    failed, errors, seconds, cpu, tracked = {}, [], [], [], 0
     with tqdm(total=len(views) * len(frames), desc='register', unit='pair', disable=not progress) as bar:
         for view in views:
             ref = dataset.reference_camera(view)
             image = dataset.reference_image(view)
             registrar = Registrar(settings, image, ref, dataset.area, f'{view}/reference', backend)
             for frame in frames:
-                r = registrar.register(dataset.load_image(view, frame), frame)
+                image = dataset.load_image(view, frame)
+                start = time.process_time()
+                r = registrar.register(image, frame)
+                cpu.append(time.process_time() - start)
                 seconds.append(r.seconds)
+                tracked += r.message.startswith('tracked')
                 if r.ok:
                     errors.append(factor * homography_error_px(r.ref_H_img, dataset.camera(view, frame), ref,
                                                                dataset.area, settings.exclude_boxes))
@@ -64,4 +70,4 @@ def acceptance_run(dataset, settings: RegisterSettings = None, views=None, frame
             'error_px_median': float(np.median(errors)) if errors else float('nan'),
             'error_px_max': float(np.max(errors)) if errors else float('nan'),
             'seconds_median': float(np.median(seconds)) if seconds else float('nan'),
-            'width': width, 'settings': settings}
+            'cpu_seconds': cpu, 'tracked': tracked, 'width': width, 'settings': settings}

@@ -2,7 +2,12 @@
 -> sanity gate -> result; with re-keying to a recent good frame when confidence stays low, and a way
 back: while re-keyed, the original reference is tried again every ``retry_reference_every`` frames and
 whenever the chained registration is weak, and takes over again when it registers well (chains
-accumulate error; the reference does not)."""
+accumulate error; the reference does not).
+
+Mode ``track`` (:mod:`matrix_core.register.flow_tracking`): frames between anchors are registered by optical
+flow from the previous frame, refined against the anchor and chained to the anchor's registration; an anchor is a
+full registration as above, made on the first frame, every ``reanchor_every`` frames, after a failure, and
+whenever the chain is doubted (too few flow inliers, or the sanity gate rejects the chained homography)."""
 
 import time
 from dataclasses import replace
@@ -14,6 +19,7 @@ from matrix_core.geometry.camera import Camera
 from matrix_core.register.backends import make_backend
 from matrix_core.register.features import Features
 from matrix_core.register.fit import fit_homography
+from matrix_core.register.flow_tracking import FlowTracker, TrackState, registered_camera
 from matrix_core.register.gate import check_registration
 from matrix_core.register.matching import match_symmetric
 from matrix_core.register.reference import Reference
@@ -50,6 +56,8 @@ class Registrar:
         self._weak_streak = 0
         self._frames_on_key = 0  # frames registered since the last re-keying
         self._last_good = None  # (frame_id, features, ref_H_img)
+        self.tracker = FlowTracker(s.scale, s.track_corners, s.ransac_threshold_px, s.estimator, s.seed)
+        self._track = None  # TrackState of the last registered frame (mode track), None: next one anchors
 
     @property
     def reference_id(self) -> str:
@@ -64,13 +72,27 @@ class Registrar:
 
     def register(self, image: np.ndarray, frame_id='') -> Registration:
         """Register one (H, W, 3) BGR current image; see :class:`Registration` for the output."""
-        s = self.settings
         start = time.perf_counter()
         cam = self.reference.camera
         h, w = image.shape[:2]
         if (w, h) != (cam.width, cam.height):
+            self._track = None
             return self._result(STATUS_FAILED, None, 0, 0, float('nan'), start,
                                 f'image is {w}x{h}, the reference is {cam.width}x{cam.height}')
+        if self.settings.mode != 'track':
+            return self._register_full(image, frame_id, start)
+        gray = self.tracker.reduce(image)
+        tracked, why = self._flow(gray, start)
+        if tracked is not None:
+            return tracked
+        result = self._register_full(image, frame_id, start)
+        self._anchor(gray, result, frame_id)
+        return replace(result, message='; '.join(filter(None, [f'anchor: {why}', result.message])),
+                       seconds=time.perf_counter() - start)
+
+    def _register_full(self, image: np.ndarray, frame_id, start) -> Registration:
+        """Features of ``image`` (full-size BGR or grey) matched to the reference or key frame."""
+        s = self.settings
         cur = self.backend.extract(image, s.max_features)
         notes = []
         result = None
@@ -89,6 +111,45 @@ class Registrar:
             message = '; '.join(([result.message] if result.message else []) + notes)
             result = replace(result, message=message)
         return replace(result, seconds=time.perf_counter() - start)
+
+    def _flow(self, gray: np.ndarray, start) -> tuple:
+        """(tracked Registration, '') when the flow from the previous frame holds, else (None, why it
+        does not: the reason of the anchor that follows)."""
+        s, state = self.settings, self._track
+        if state is None:
+            return None, 'no registered previous frame'
+        if s.reanchor_every and state.steps + 1 >= s.reanchor_every:
+            return None, f'due (every {s.reanchor_every} frames)'
+        step = self.tracker.step(state, gray)
+        if step.anchor_H_cur is None:
+            return None, f'chain doubted: {step.reason}'
+        if step.inliers < s.track_min_inliers:
+            return None, f'chain doubted: {step.inliers} flow inliers (track_min_inliers {s.track_min_inliers})'
+        anchor = state.anchor
+        H = anchor.ref_H_img @ step.anchor_H_cur
+        H = H / H[2, 2]
+        cam = self.reference.camera
+        reason, implied = check_registration(
+            H, cam.K, cam.img_H_ground(), cam.center, self.reference.polygon, self._previous_center,
+            self._frames_since_good, s.gate_max_shape_error, s.gate_max_area_ratio, s.gate_max_height_change_m,
+            s.gate_max_step_m, anchor.inliers, s.gate_shape_inliers)
+        if reason:
+            return None, f'chain doubted: {reason}'
+        self._previous_center, self._frames_since_good = implied.center, 1
+        steps = state.steps + 1
+        self._track = TrackState(anchor, gray, step.corners, step.anchor_H_cur, steps, step.prev_H_cur)
+        return self._result(STATUS_OK, H, step.tracked, step.inliers, step.error_px, start,
+                            f'tracked: {steps} frame(s) after its anchor', anchor.chain, implied), ''
+
+    def _anchor(self, gray: np.ndarray, result: Registration, frame_id) -> None:
+        """Start a new chain at a full registration (none after a failure: the next frame anchors again)."""
+        self._track = None
+        if result.ok:
+            s = self.settings
+            self._track = self.tracker.anchor(gray, registered_camera(self.reference.camera, result.implied),
+                                              result.ref_H_img, f'{result.reference_id}<-track:{frame_id}',
+                                              result.inliers, self.reference.area, s.ground_margin_m,
+                                              s.exclude_boxes)
 
     def reference_result(self) -> Registration:
         """The result of the reference image itself (identity, exact by definition), for a caller that made

@@ -64,6 +64,20 @@ class RegisterSettings:
                 'chained frame is weak; it takes over again when good (0 = never)'})
     good_confidence: float = field(default=0.25, metadata={
         'help': 'a frame with at least this confidence (and passing the gate) may become a key frame'})
+    mode: str = field(default='reference', metadata={
+        'help': "reference: every frame registered to the reference by features (the paper's way); track: "
+                'frames between anchors follow the previous frame by optical flow on its ground corners, '
+                "refined against the anchor's corners (register/flow_tracking.py); anchors (full "
+                'registrations) on the first frame, every reanchor_every frames, after a failure and when the '
+                'chain is doubted'})
+    reanchor_every: int = field(default=10, metadata={
+        'help': 'mode track: a full registration every this many frames (1 = every frame; 0 = only on the '
+                'first frame, after failures and when the chain is doubted)'})
+    track_corners: int = field(default=2000, metadata={
+        'help': 'mode track: corners detected on each anchor at the reduced scale, before the ground mask'})
+    track_min_inliers: int = field(default=40, metadata={
+        'help': 'mode track: a frame whose refinement against the anchor has fewer inliers doubts the chain '
+                '(a full registration follows)'})
     seed: int = field(default=0, metadata={
         'help': 'random seed of the ransac estimator: the same seed repeats its homographies, other seeds '
                 'draw other samples (magsac is deterministic and ignores it)'})
@@ -81,11 +95,16 @@ class RegisterSettings:
             raise ValueError(f'matcher must be flann or brute, got {self.matcher!r}')
         if self.estimator not in ('ransac', 'magsac'):
             raise ValueError(f'estimator must be ransac or magsac, got {self.estimator!r}')
+        if self.mode not in ('reference', 'track'):
+            raise ValueError(f'mode must be reference or track, got {self.mode!r}')
+        if self.reanchor_every < 0:
+            raise ValueError(f'reanchor_every must be >= 0, got {self.reanchor_every}')
         if len(self.exclude_boxes) % 5:
             raise ValueError(f'exclude_boxes needs groups of 5 numbers, got {len(self.exclude_boxes)}')
         if self.gate_shape_inliers < 1 or self.retry_reference_every < 0:
             raise ValueError('gate_shape_inliers must be >= 1 and retry_reference_every >= 0')
-        for name in ('max_features', 'reference_max_features', 'min_inliers', 'ransac_iterations'):
+        for name in ('max_features', 'reference_max_features', 'min_inliers', 'ransac_iterations', 'track_corners',
+                     'track_min_inliers'):
             if getattr(self, name) < 4:
                 raise ValueError(f'{name} must be at least 4')
         if self.ransac_threshold_px <= 0 or self.gate_max_area_ratio <= 1.0:

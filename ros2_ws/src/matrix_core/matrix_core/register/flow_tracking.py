@@ -1,0 +1,196 @@
+"""Registration that tracks: the previous frame's ground corners followed into the current frame.
+
+Between consecutive frames (0.5 s apart) a drone's image moves little, so instead of describing and matching
+features against the reference, a frame is registered from the last one, at the registration's reduced
+resolution, in two steps:
+
+1. flow: the previous frame's ground corners are tracked into the current frame by pyramidal Lucas-Kanade
+   (forward-backward checked) and a robust ``prev_H_cur`` is fitted; chained, ``anchor_H_prev @ prev_H_cur``
+   predicts where the current frame lies in the ANCHOR frame (the last fully registered one);
+2. refinement against the anchor: the current image is warped into the anchor frame by that prediction, the
+   anchor's own ground corners are tracked into the warped image (small residual motion, the ground's
+   perspective change already undone by the warp) and ``anchor_H_cur`` is fitted to them directly.
+
+Step 2 makes each frame one hop from its anchor: the error of the flow steps does not add up along the
+chain (measured: chained flow steps alone drift by about 0.2 px per frame). The caller chains
+``ref_H_cur = ref_H_anchor @ anchor_H_cur`` (``matrix_core.register.registrar``, mode ``track``).
+
+Anchor corners are kept only where the registered camera sees the scene ground (the reference's ground mask,
+:func:`~matrix_core.register.ground_mask.ground_pixels`, with the camera the registration implies): facades,
+the block and the sky do not follow the ground homography; people do not either and fall out as outliers.
+Coordinates: reduced-image pixel centres inside the states, full-resolution pixels for every homography.
+"""
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from matrix_core.geometry.camera import Camera, pose_matrix
+from matrix_core.geometry.homography import ImpliedCamera, apply_homography, pixel_scale_homography
+from matrix_core.register.features import resize, to_gray
+from matrix_core.register.fit import fit_homography
+from matrix_core.register.ground_mask import ground_pixels
+
+# Flow: a 15 px window on 5 pyramid levels (0-4) follows ~110 reduced px (450 full-res px) of motion, more
+# than a MATRIX drone moves in 0.5 s (up to ~240 full-res px); the last step's motion predicts the next.
+FLOW_WINDOW, FLOW_LEVELS = (15, 15), 4
+# Refinement: the residual after the warp is about a pixel; a small window keeps the local planar model.
+REFINE_WINDOW, REFINE_LEVELS = (9, 9), 1
+LK_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.01)
+# A corner is kept when tracking it back lands within this many reduced pixels of where it started.
+FORWARD_BACKWARD_PX = 0.1
+# Inlier threshold (full-resolution pixels) of the refined fit: well-tracked ground corners agree to a pixel,
+# slowly walking people do not.
+REFINE_THRESHOLD_PX = 1.0
+# Corner detection (reduced image): a low quality level (relative to the strongest corner, usually a lit
+# window or a person) because the plaza's concrete is weakly textured; 10 px apart spreads them out.
+CORNER_QUALITY = 1e-4
+CORNER_MIN_DISTANCE = 10
+
+
+@dataclass(frozen=True)
+class Anchor:
+    """A fully registered frame that the next frames are refined against.
+
+    Attributes:
+        gray: (h, w) uint8 reduced grey image; corners: (N, 1, 2) float32 its ground corners (reduced pixels).
+        ref_H_img: (3, 3) its registration (full-resolution pixels -> reference pixels).
+        chain: reference_id of the frames registered through it, e.g. 'D1/reference<-track:17'.
+        inliers: inliers of its full registration (the tolerance of the sanity gate, see gate.py).
+    """
+
+    gray: np.ndarray
+    corners: np.ndarray
+    ref_H_img: np.ndarray
+    chain: str
+    inliers: int
+
+
+@dataclass(frozen=True)
+class TrackState:
+    """The last registered frame, what the next frame's flow starts from.
+
+    Attributes:
+        anchor: the :class:`Anchor` of the chain.
+        gray: (h, w) uint8 reduced grey image; corners: (M, 1, 2) float32 its corners (reduced pixels).
+        anchor_H_img: (3, 3) its pixels -> the anchor's pixels (full resolution; identity for the anchor).
+        steps: frames registered through the anchor since it (0 for the anchor itself).
+        prev_H_cur: (3, 3) its own flow step (full resolution), predicts the next one; None for the anchor.
+    """
+
+    anchor: Anchor
+    gray: np.ndarray
+    corners: np.ndarray
+    anchor_H_img: np.ndarray
+    steps: int = 0
+    prev_H_cur: np.ndarray = None
+
+
+@dataclass(frozen=True)
+class FlowStep:
+    """One frame registered from the last one.
+
+    Attributes:
+        anchor_H_cur: (3, 3) current full-resolution pixels -> anchor pixels, or None (see ``reason``).
+        prev_H_cur: (3, 3) the flow step, current -> previous full-resolution pixels (None if it failed).
+        tracked: anchor corners that passed the refinement's forward-backward check; inliers: of them, inliers.
+        error_px: mean inlier reprojection error, full-resolution anchor pixels (NaN if none).
+        corners: (K, 1, 2) float32 the inliers' positions in the current reduced image (the next flow's start).
+        reason: why anchor_H_cur is None ('' otherwise).
+    """
+
+    anchor_H_cur: np.ndarray
+    prev_H_cur: np.ndarray
+    tracked: int
+    inliers: int
+    error_px: float
+    corners: np.ndarray = None
+    reason: str = ''
+
+
+def _track(a: np.ndarray, b: np.ndarray, pa: np.ndarray, guess, window, levels) -> tuple:
+    """LK of (N, 1, 2) ``pa`` from image ``a`` into ``b`` (starting at ``guess`` if given) and back:
+    ((N, 1, 2) positions in ``b``, (N,) bool tracked both ways and back within FORWARD_BACKWARD_PX)."""
+    flags = cv2.OPTFLOW_USE_INITIAL_FLOW if guess is not None else 0
+    pb, ok, _ = cv2.calcOpticalFlowPyrLK(a, b, pa, guess, winSize=window, maxLevel=levels, criteria=LK_CRITERIA,
+                                         flags=flags)
+    back, ok_back, _ = cv2.calcOpticalFlowPyrLK(b, a, pb, pa.copy(), winSize=window, maxLevel=levels,
+                                                criteria=LK_CRITERIA, flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
+    fb = np.linalg.norm((back - pa).reshape(-1, 2), axis=1)
+    return pb, ok.ravel().astype(bool) & ok_back.ravel().astype(bool) & (fb < FORWARD_BACKWARD_PX)
+
+
+class FlowTracker:
+    """Ground corners, flow and refinement at ``scale`` of the full image.
+
+    Args:
+        scale: reduced / full image size (the registration's ``scale``).
+        max_corners: corners detected per anchor (strongest first, before the ground mask).
+        threshold_px: inlier threshold of the flow step's robust fit, full-resolution pixels.
+        estimator: 'magsac' or 'ransac' (:func:`~matrix_core.register.fit.fit_homography`); seed: its seed.
+    """
+
+    def __init__(self, scale: float, max_corners: int, threshold_px: float, estimator: str = 'magsac',
+                 seed: int = 0):
+        self.scale = scale
+        self.max_corners = max_corners
+        self.threshold_px = threshold_px
+        self.estimator = estimator
+        self.seed = seed
+        # full-resolution pixels <-> reduced pixels (pixel-centre convention of features.to_full_resolution)
+        self.full_H_small = pixel_scale_homography(1 / scale, 1 / scale)
+        self.small_H_full = np.linalg.inv(self.full_H_small)
+
+    def reduce(self, image: np.ndarray) -> np.ndarray:
+        """(H, W, 3) BGR or (H, W) grey full image -> (h, w) uint8 grey at ``scale``."""
+        return resize(to_gray(image), self.scale)
+
+    def anchor(self, gray: np.ndarray, camera: Camera, ref_H_img: np.ndarray, chain: str, inliers: int,
+               area, margin_m: float, boxes) -> TrackState:
+        """Start a chain at a fully registered frame: its reduced ``gray``, the camera its registration
+        implies (full resolution) and the scene ground (``area`` grown by ``margin_m``, not behind ``boxes``)."""
+        found = cv2.goodFeaturesToTrack(gray, self.max_corners, CORNER_QUALITY, CORNER_MIN_DISTANCE)
+        xy = np.zeros((0, 2), np.float32) if found is None else found.reshape(-1, 2)
+        keep = ground_pixels(camera, apply_homography(self.full_H_small, xy), area, margin_m, boxes)
+        corners = xy[keep].reshape(-1, 1, 2).astype(np.float32)
+        anchor = Anchor(gray, corners, ref_H_img, chain, inliers)
+        return TrackState(anchor, gray, corners, np.eye(3))
+
+    def step(self, state: TrackState, gray: np.ndarray) -> FlowStep:
+        """Register the reduced ``gray`` from ``state`` (flow, then refinement against the anchor)."""
+        def failed(reason, prev_H_cur=None, tracked=0):
+            return FlowStep(None, prev_H_cur, tracked, 0, float('nan'), None, reason)
+
+        if gray.shape != state.gray.shape:
+            return failed(f'image size changed from {state.gray.shape} to {gray.shape}')
+        if len(state.corners) < 4:
+            return failed(f'only {len(state.corners)} ground corners in the previous frame')
+        F, S = self.full_H_small, self.small_H_full
+        guess = None
+        if state.prev_H_cur is not None:  # constant motion: start where the last step would take the corners
+            guess = cv2.perspectiveTransform(state.corners, S @ np.linalg.inv(state.prev_H_cur) @ F)
+        cur, good = _track(state.gray, gray, state.corners, guess, FLOW_WINDOW, FLOW_LEVELS)
+        flow = fit_homography(apply_homography(F, cur.reshape(-1, 2)[good]),
+                              apply_homography(F, state.corners.reshape(-1, 2)[good]), self.estimator,
+                              self.threshold_px, seed=self.seed)
+        if flow.H is None:
+            return failed(f'flow: {flow.reason}', tracked=int(good.sum()))
+        predicted = state.anchor_H_img @ flow.H
+        anchor = state.anchor
+        warped = cv2.warpPerspective(gray, S @ predicted @ F, anchor.gray.shape[::-1], flags=cv2.INTER_LINEAR)
+        found, good = _track(anchor.gray, warped, anchor.corners, anchor.corners.copy(), REFINE_WINDOW,
+                             REFINE_LEVELS)
+        xy_cur = apply_homography(np.linalg.inv(predicted) @ F, found.reshape(-1, 2)[good])
+        fit = fit_homography(xy_cur, apply_homography(F, anchor.corners.reshape(-1, 2)[good]), self.estimator,
+                             REFINE_THRESHOLD_PX, seed=self.seed)
+        if fit.H is None:
+            return failed(f'refinement against the anchor: {fit.reason}', flow.H, int(good.sum()))
+        corners = apply_homography(S, xy_cur[fit.inliers]).reshape(-1, 1, 2).astype(np.float32)
+        return FlowStep(fit.H, flow.H, int(good.sum()), int(fit.inliers.sum()), fit.error_px, corners)
+
+
+def registered_camera(reference: Camera, implied: ImpliedCamera) -> Camera:
+    """The full-resolution camera (the reference's intrinsics, size) a registration implies (the gate's
+    :class:`ImpliedCamera`), for the ground mask of that frame's corners."""
+    return Camera(reference.K, pose_matrix(implied.R, implied.t), reference.width, reference.height)
