@@ -19,7 +19,9 @@ frame the wall time from the frame's first image to its tracks (latency). Every 
 system from /proc, DDS and idle spinning included) between the first image and the last tracks, divided by
 the frames, is each stage's CPU-s per frame (``drone``: calib + register of all drones). The probe also lists
 the graph's topics: with JPEG bags no raw ``sensor_msgs/Image`` may cross DDS. ``--runs N`` repeats each
-case and prints the medians.
+case and prints the medians. First, the CPU cost of decoding one of the bag's JPEGs on one core, as separate
+calib and register processes do it (colour, then grey, each) and as the drone process does (grey once, then
+register's resize).
 
     python scripts/bench_graph.py                              # both sequences, both modes, 1 run each
     python scripts/bench_graph.py --sequence sim --mode lockstep --runs 3
@@ -70,12 +72,12 @@ def sample_sequence(out: Path, sample: Path) -> tuple:
 
 
 class Probe:
-    """First arrival of each frame's image on one drone, arrival of each frame's tracks (wall clock) and the
-    views the fuse node used for each frame."""
+    """First arrival of each frame's image on one drone, arrival of each frame's tracks (wall clock), the
+    views the fuse node used for each frame and how many calib and register statuses came for it."""
 
     def __init__(self, view: str, compressed: bool):
         self.node = rclpy.create_node('bench_graph_probe')
-        self.first_image, self.tracks, self.views_used, self.raw_topics = {}, {}, {}, set()
+        self.first_image, self.tracks, self.views_used, self.drone_done, self.raw_topics = {}, {}, {}, {}, set()
         kind, topic = (CompressedImage, f'/{view}/image/compressed') if compressed else (Image, f'/{view}/image_raw')
         self.node.create_subscription(kind, topic, lambda m: self.first_image.setdefault(
             stamp_to_seconds(m.header.stamp), time.monotonic()), qos_by_name('reliable', 2))
@@ -85,7 +87,10 @@ class Probe:
 
     def _on_diagnostics(self, msg):
         for st in msg.status:
-            if st.name == 'fuse':
+            if st.name.startswith(('calib/', 'register/')):
+                stamp = stamp_to_seconds(msg.header.stamp)
+                self.drone_done[stamp] = self.drone_done.get(stamp, 0) + 1
+            elif st.name == 'fuse':
                 self.views_used[stamp_to_seconds(msg.header.stamp)] = int(
                     next(kv.value for kv in st.values if kv.key == 'views_used'))
 
@@ -93,7 +98,8 @@ class Probe:
         end = time.monotonic() + seconds
         while time.monotonic() < end:
             rclpy.spin_once(self.node, timeout_sec=0.02)
-        self.raw_topics |= {t for t, types in self.node.get_topic_names_and_types() if RAW_IMAGE in types}
+        self.raw_topics |= {t for t, types in self.node.get_topic_names_and_types()   # published, not only subscribed
+                            if RAW_IMAGE in types and self.node.count_publishers(t)}
 
 
 def stage_of(label: str) -> str:
@@ -113,15 +119,19 @@ def run_once(settings: GraphSettings, facts: BagFacts, run: Path, drain_s: float
         for spec in specs:
             graph.start(spec)
         player, others = graph.procs[specs[-1].label], (specs[-1].label, 'graph_monitor', 'recorder')
-        last_news, seen = time.monotonic(), 0
-        # until the player is done and every frame has tracks (or none came for drain_s: dropped)
+        last_news, seen, stages = time.monotonic(), 0, 2 * len(settings.views)
+
+        def news():   # outputs so far: tracks, calib's and register's statuses
+            return len(probe.tracks) + sum(probe.drone_done.values())
+        # until the player is done and every stage finished every frame (or nothing came for drain_s: dropped;
+        # without lockstep fuse may fuse a frame before calib and register finished it)
         while not graph.died(exclude=others) and (player.poll() is None or (
-                len(probe.tracks) < len(probe.first_image) and time.monotonic() - last_news < drain_s)):
+                news() < len(probe.first_image) * (1 + stages) and time.monotonic() - last_news < drain_s)):
             probe.spin(0.2)
             if cpu_start is None and probe.first_image:
                 cpu_start = graph.cpu_seconds()   # processing starts; startup (imports, models) excluded
-            if len(probe.tracks) > seen:
-                seen, last_news = len(probe.tracks), time.monotonic()
+            if news() > seen:
+                seen, last_news = news(), time.monotonic()
                 cpu_end = graph.cpu_seconds()
         crashed = graph.died(exclude=others)
     finally:
@@ -141,6 +151,28 @@ def run_once(settings: GraphSettings, facts: BagFacts, run: Path, drain_s: float
             stages[stage_of(label)] = stages.get(stage_of(label), 0.0) + (end - cpu_start.get(label, 0.0)) / len(lat)
         figures['cpu'] = stages
     return figures
+
+
+def decode_costs(bag: Path, repeats: int = 20) -> str:
+    """CPU ms (this process, one OpenCV thread) per decode of the bag's first JPEG: each of the separate
+    processes (colour + grey) and the drone process (grey + resize to register's scale 0.25)."""
+    import cv2
+
+    from matrix_core.bags.reader import read_bag
+    from matrix_core.message_fields import gray_image_from_msg, image_from_msg
+
+    msg = next(m.msg for m in read_bag(bag) if m.topic.endswith('/image/compressed'))
+    cv2.setNumThreads(1)
+
+    def ms(work):
+        start = time.process_time()
+        for _ in range(repeats):
+            work()
+        return (time.process_time() - start) / repeats * 1000
+    separate = ms(lambda: cv2.cvtColor(image_from_msg(msg), cv2.COLOR_BGR2GRAY))
+    once = ms(lambda: cv2.resize(gray_image_from_msg(msg), None, fx=0.25, fy=0.25, interpolation=cv2.INTER_AREA))
+    return (f'decode of one {len(msg.data) / 1e3:.0f} kB JPEG (CPU, one thread): separate calib and register '
+            f'2 x {separate:.1f} ms (colour + grey each), drone process {once:.1f} ms (grey once + resize)')
 
 
 def report(name: str, runs: list, views: int) -> int:
@@ -190,6 +222,7 @@ def main() -> int:
     print(f'whole graph on {os.cpu_count()} cores, 8 drones, JPEG bags, '
           + ('separate calib and register processes' if args.separate else 'one drone process (calib + register) per drone')
           + f'; DDS profile {args.dds_profile or os.environ.get("FASTRTPS_DEFAULT_PROFILES_FILE", "(Fast DDS defaults)")}')
+    print(decode_costs(next(iter(sequences.values()))[0]))
     rclpy.init()
     code = 0
     try:
