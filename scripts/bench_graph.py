@@ -207,12 +207,16 @@ def main() -> int:
     p.add_argument('--hz', type=float, default=2.0, help='frame rate of the realtime mode')
     p.add_argument('--separate', action='store_true', help='separate calib and register processes (drone_process off)')
     p.add_argument('--drones_per_process', type=int, default=1, help='1 = one process (or two: --separate) per drone')
-    p.add_argument('--dds_profile', default='', help="Fast DDS profile XML for every process ('' = the environment's)")
+    p.add_argument('--dds_profile', default='', help="Fast DDS profile XML for every process ('' = the environment's, "
+                   "none = Fast DDS's own defaults)")
     p.add_argument('--checkpoint', default='', help='BEV checkpoint (default: the fuse node default)')
     p.add_argument('--sample', default=os.environ.get('MATRIX_SHARED', str(ROOT.parent / 'shared')) + '/matrix_sample')
     p.add_argument('--out', default=str(ROOT / 'out/bench_graph'))
     args = p.parse_args()
     out = Path(args.out)
+    if args.dds_profile == 'none':   # the processes inherit this environment
+        os.environ.pop('FASTRTPS_DEFAULT_PROFILES_FILE', None)
+        args.dds_profile = ''
     sequences = {}
     if args.sequence in ('real', 'both'):
         sequences['real sample'] = sample_sequence(out / 'sample_bag', Path(args.sample))

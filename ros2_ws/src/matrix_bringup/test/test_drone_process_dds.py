@@ -117,3 +117,15 @@ def test_drone_process_decodes_once_and_hands_the_registration_to_calib(matrix_s
         # D3 (measured), each as close to the truth as the other
         assert rotation_angle_deg(cam.R, camera.R) < 0.15 and np.linalg.norm(cam.center - camera.center) < 0.08
         assert rotation_angle_deg(cam.R, truth.R) < 0.15 and np.linalg.norm(cam.center - truth.center) < 0.08
+
+
+def test_drone_process_names_a_parameter_neither_node_has(matrix_sample, node_executable):
+    """One parameter set for two nodes: each takes the other's names, a name neither has is an error."""
+    drone = start_node(node_executable('matrix_bringup', 'drone'), f'views:=[{VIEW}]',
+                       f'reference_dataset:={matrix_sample}', 'registration_wiat_s:=1.0')
+    try:
+        drone.wait(120)
+    finally:
+        out = stop(drone)
+    assert drone.returncode != 0, out
+    assert "register: unknown parameter(s) 'registration_wiat_s' (did you mean 'registration_wait_s'?)" in out, out
