@@ -19,15 +19,18 @@ def test_each_drone_host_runs_its_own_camera_register_and_calib(settings):
     d = deployment(settings(record='/out/rec', monitor=True), FACTS)
     assert list(d.hosts) == [*VIEWS, GROUND] and d.drones == VIEWS
     for v in VIEWS:
-        assert [n.label for n in d.hosts[v]] == [f'{v}/calib', f'{v}/register', f'{v}/bag_player']
-        calib, register, player = d.hosts[v]
-        assert calib.parameters['views'] == register.parameters['views'] == [v]
+        assert [n.label for n in d.hosts[v]] == [f'{v}/drone', f'{v}/bag_player']   # calib + register: one process
+        drone, player = d.hosts[v]
+        assert drone.parameters['views'] == [v] and drone.parameters['use_registration'] is True
         # the camera of this drone only, compressed, on the recorded timing (a camera does not wait)
         assert player.parameters['topics'] == [f'/{v}/image/compressed', f'/{v}/ground_truth/camera_info']
         assert player.parameters['lockstep'] is False and 'lockstep_topic' not in player.parameters
-        assert player.parameters['wait_for_subscribers'] == 3   # calib, register here; fuse across the link
+        assert player.parameters['wait_for_subscribers'] == 2   # drone here; fuse across the link
+    separate = deployment(settings(record='/out/rec', monitor=True, drone_process=False), FACTS)
+    assert [n.label for n in separate.hosts['D2']] == ['D2/calib', 'D2/register', 'D2/bag_player']
+    assert separate.hosts['D2'][-1].parameters['wait_for_subscribers'] == 3
     assert [n.label for n in d.hosts[GROUND]] == ['fuse', 'recorder', 'graph_monitor']
-    assert d.host_of('D2/register') == 'D2' and d.host_of('fuse') == GROUND
+    assert d.host_of('D2/drone') == 'D2' and d.host_of('fuse') == GROUND
     # no /clock across links: every host on its own clock
     assert not any(n.parameters.get('use_sim_time') for nodes in d.hosts.values() for n in nodes)
 

@@ -12,6 +12,7 @@ import yaml
 from matrix_bringup.graph import BagFacts, GraphSettings, NodeSpec, graph_nodes
 from matrix_core.settings import settings_fields
 from launch.actions import RegisterEventHandler, SetEnvironmentVariable
+from launch_ros.actions import Node
 from launch_files import declared_arguments, launch, load
 
 LAUNCH = Path(__file__).resolve().parents[2] / 'ros2_ws/src/matrix_bringup/launch/full_graph.launch.py'
@@ -26,7 +27,7 @@ def settings(matrix_sample):
 
 
 def test_per_drone_graph_has_one_calib_and_register_per_drone(settings):
-    nodes = graph_nodes(settings(record='/out/rec'), FACTS)
+    nodes = graph_nodes(settings(record='/out/rec', drone_process=False), FACTS)
     labels = [n.label for n in nodes]
     assert labels == [f'{v}/{exe}' for v in VIEWS for exe in ('calib', 'register')] + ['fuse', 'recorder',
                                                                                          'bag_player']
@@ -45,32 +46,56 @@ def test_per_drone_graph_has_one_calib_and_register_per_drone(settings):
     assert (player['lockstep_topic'], player['wait_for_subscribers']) == ('/tracks', 3)
     # lockstep: fuse waits for every view as long as the player waits (deterministic); else sync_timeout
     assert fuse.parameters['sync_timeout'] == player['lockstep_timeout'] == 120.0
-    free = graph_nodes(settings(lockstep=False, sync_timeout=2.0), FACTS)
+    free = graph_nodes(settings(lockstep=False, sync_timeout=2.0, drone_process=False), FACTS)
     assert next(n for n in free if n.name == 'fuse').parameters['sync_timeout'] == 2.0
     assert 'lockstep_topic' not in free[-1].parameters and free[-1].parameters['lockstep'] is False
     assert 'registration_wait_s' not in free[0].parameters   # the node's default: a live drone is not waited for
-    own = graph_nodes(settings(calib_registration=False), FACTS)[0].parameters
+    own = graph_nodes(settings(calib_registration=False, drone_process=False), FACTS)[0].parameters
     assert own['use_registration'] is False and 'registration_wait_s' not in own
 
 
+def test_drone_process_hosts_calib_and_register_of_each_drone(settings):
+    """The default: one process per drone runs both nodes under their own names, with both nodes' parameters."""
+    nodes = graph_nodes(settings(record='/out/rec'), FACTS)
+    assert [n.label for n in nodes] == [f'{v}/drone' for v in VIEWS] + ['fuse', 'recorder', 'bag_player']
+    drone, separate = nodes[0], graph_nodes(settings(record='/out/rec', drone_process=False), FACTS)
+    assert (drone.package, drone.executable, drone.namespace) == ('matrix_bringup', 'drone', 'D1')
+    assert drone.parameters == {**separate[0].parameters, **separate[1].parameters}   # calib's and register's
+    assert drone.param_files == separate[1].param_files   # register.yaml (`/**`: both nodes; views overridden)
+    args = drone.ros_args()
+    assert '__node:=drone' not in ' '.join(args) and args[:3] == ['--ros-args', '-r', '__ns:=/D1']
+    # one image subscription per drone instead of calib's and register's: the player waits for drone and fuse
+    assert nodes[-1].parameters['wait_for_subscribers'] == 2
+    assert [n.label for n in nodes[len(VIEWS):]] == [n.label for n in separate[2 * len(VIEWS):]]
+
+
 def test_drones_split_over_processes(settings):
-    nodes = graph_nodes(settings(drones_per_process=3), FACTS)
+    nodes = graph_nodes(settings(drones_per_process=3, drone_process=False), FACTS)
     calib = [n for n in nodes if n.executable == 'calib']
     assert [(n.label, n.parameters['views']) for n in calib] == [
         ('calib_1', ['D1', 'D2', 'D3']), ('calib_2', ['D4', 'D5', 'D6']), ('calib_3', ['D7', 'D8'])]
     assert [n.label for n in nodes if n.executable == 'register'] == ['register_1', 'register_2', 'register_3']
+    # drone processes: drone_2 hosts the nodes calib_2 and register_2 (node-specific remapping rules)
+    drones = [n for n in graph_nodes(settings(drones_per_process=3), FACTS) if n.executable == 'drone']
+    assert [(n.label, n.parameters['views']) for n in drones] == [
+        ('drone_1', ['D1', 'D2', 'D3']), ('drone_2', ['D4', 'D5', 'D6']), ('drone_3', ['D7', 'D8'])]
+    assert drones[1].remaps == {'calib:__node': 'calib_2', 'register:__node': 'register_2'}
+    assert drones[1].ros_args()[:5] == ['--ros-args', '-r', 'calib:__node:=calib_2', '-r', 'register:__node:=register_2']
 
 
 def test_monitor_paces_lockstep_on_every_stage(settings):
     nodes = graph_nodes(settings(drones_per_process=0, monitor=True, views=['D1', 'D5']),
                         BagFacts(compressed=False, frames=7, has_ground_truth=True))
-    assert [n.label for n in nodes] == ['calib', 'register', 'fuse', 'graph_monitor', 'bag_player']
-    assert nodes[0].parameters['views'] == ['D1', 'D5']
-    monitor = nodes[3].parameters
+    assert [n.label for n in nodes] == ['drone', 'fuse', 'graph_monitor', 'bag_player']
+    assert nodes[0].parameters['views'] == ['D1', 'D5'] and not nodes[0].remaps
+    monitor = nodes[2].parameters
     assert monitor['wait_for'] == ['register', 'calib', 'tracks'] and monitor['expected_frames'] == 7
     player = nodes[-1].parameters
-    # raw images: the monitor reads them too
-    assert (player['lockstep_topic'], player['wait_for_subscribers']) == ('/graph_monitor/frame_done', 4)
+    # raw images: the monitor reads them too (drone and fuse read them; separate calib and register: one more)
+    assert (player['lockstep_topic'], player['wait_for_subscribers']) == ('/graph_monitor/frame_done', 3)
+    separate = graph_nodes(settings(drones_per_process=0, monitor=True, views=['D1', 'D5'], drone_process=False),
+                           BagFacts(compressed=False, frames=7, has_ground_truth=True))
+    assert [n.label for n in separate][:2] == ['calib', 'register'] and separate[-1].parameters['wait_for_subscribers'] == 4
     with pytest.raises(ValueError, match='no ground_truth'):
         graph_nodes(settings(monitor=True), BagFacts(compressed=False, frames=7, has_ground_truth=False))
 
@@ -80,13 +105,13 @@ def test_every_process_is_built_and_its_parameter_files_apply(node_executable, s
     from matrix_bev_tracker.settings import FuseNodeSettings
     from matrix_register.settings import RegisterNodeSettings
 
-    fields = {'register': RegisterNodeSettings, 'fuse': FuseNodeSettings}
+    fields = {'register': RegisterNodeSettings, 'drone': RegisterNodeSettings, 'fuse': FuseNodeSettings}
     for node in graph_nodes(settings(record='/out/rec', monitor=True), FACTS):
         assert node_executable(node.package, node.executable).is_file()
         for path in node.param_files:
             (key, body), = yaml.safe_load(Path(path).read_text()).items()
             assert key == '/**', path
-            assert set(body['ros__parameters']) <= {n for n, *_ in settings_fields(fields[node.name])}, path
+            assert set(body['ros__parameters']) <= {n for n, *_ in settings_fields(fields[node.executable])}, path
 
 
 def test_ros_args_command_line():
@@ -118,8 +143,10 @@ def test_launch_file_starts_the_graph_nodes(tmp_path):
     launched = [a for a in actions if not isinstance(a, (SetEnvironmentVariable, RegisterEventHandler))]
     expected = graph_nodes(GraphSettings(bag=str(sim / 'bag'), dataset=str(sim), views=['D2', 'D4'],
                                          record=str(tmp_path / 'rec'), dds_profile='/etc/fastdds.xml'))
-    assert [(n.package, n.executable, n.name, n.namespace) for n in launched] == \
-        [(n.package, n.executable, n.name, n.namespace) for n in expected]
+    assert [(n.package, n.executable, n.name, n.namespace, n.remappings) for n in launched] == \
+        [(n.package, n.executable, n.name if n.renamed else Node.UNSPECIFIED_NODE_NAME, n.namespace, n.remaps)
+         for n in expected]
+    assert [n.executable for n in launched][:2] == ['drone', 'drone']   # the default: a drone process per drone
     assert [n.parameters for n in launched] == [[*n.param_files, n.parameters] for n in expected]
     calib = launched[0].parameters[-1]
     assert calib['config'].endswith('sim_simple.yaml') and calib['compressed'] is False   # from the dataset and bag

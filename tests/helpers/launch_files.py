@@ -36,9 +36,10 @@ class LaunchedNode:
 
     package: str
     executable: str
-    name: str        # as given to Node (not the full name)
+    name: str        # as given to Node (not the full name; Node.UNSPECIFIED_NODE_NAME when none)
     namespace: str   # '' when none
     parameters: list
+    remappings: dict   # '-r' rules: source -> destination
 
 
 def launch(description, **arguments) -> list:
@@ -61,4 +62,5 @@ def _launched(node: Node, context) -> LaunchedNode:
     return LaunchedNode(node.node_package, node.node_executable, node.node_name.rsplit('/', 1)[-1],
                         '' if namespace == Node.UNSPECIFIED_NODE_NAMESPACE.strip('/') else namespace,
                         [str(p) if isinstance(p, Path) else {k: list(v) if isinstance(v, tuple) else v
-                                                             for k, v in p.items()} for p in parameters])
+                                                             for k, v in p.items()} for p in parameters],
+                        dict(node.expanded_remapping_rules or []))

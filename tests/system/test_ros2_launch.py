@@ -44,7 +44,7 @@ def test_full_graph_replay_of_the_real_sample_ends_by_itself(matrix_sample, tmp_
     assert 'played 5 frames' in out and 'lockstep: only' not in out and 'Traceback' not in out
     assert f'closed {rec}:' in out   # the recorder closed its bag on the launch's SIGINT
     started, ended = _started_and_stopped(out)
-    assert len(started) == 6 and started == ended, (started, ended)   # calib, register, fuse, recorder, monitor, player
+    assert len(started) == 5 and started == ended, (started, ended)   # drone, fuse, recorder, monitor, player
     assert not [pid for pid in started if os.path.exists(f'/proc/{pid}')]
 
     summary = [line.split() for line in (monitor / 'graph_summary.txt').read_text().splitlines()]

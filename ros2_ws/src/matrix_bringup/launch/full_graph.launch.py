@@ -34,8 +34,9 @@ def _graph(context):
     actions = [SetEnvironmentVariable('FASTRTPS_DEFAULT_PROFILES_FILE', settings.dds_profile)] \
         if settings.dds_profile else []
     specs = graph_nodes(settings)
-    nodes = {spec.label: Node(package=spec.package, executable=spec.executable, name=spec.name,
-                              namespace=spec.namespace or None, output='screen',
+    nodes = {spec.label: Node(package=spec.package, executable=spec.executable,
+                              name=spec.name if spec.renamed else None, namespace=spec.namespace or None,
+                              remappings=list(spec.remaps.items()) or None, output='screen',
                               parameters=[*spec.param_files, spec.parameters]) for spec in specs}
     if IfCondition(LaunchConfiguration('exit_at_end')).evaluate(context):
         monitor = next((s.label for s in specs if s.executable == 'graph_monitor'), None)

@@ -10,7 +10,9 @@ so the graph itself is tested with plain pytest.
                --images--> fuse       calib --camera_info, pose--> recorder, [graph_monitor]
 
 With one drone per process the calib and register processes run in namespace /Dn; their topics are the
-absolute /Dn/... either way.
+absolute /Dn/... either way. With ``drone_process`` (the default) a drone's calib and register are one process
+(``drone``: matrix_bringup.drone), the image subscribed and decoded once and the registration handed over in
+process; same nodes, topics and parameters.
 
 Lockstep: the player releases the next frame when the fuse node published tracks for the last one, or,
 with ``monitor``, when the monitor saw every stage (calib, register and tracks) finish it, so that no node
@@ -35,6 +37,7 @@ PER_VIEW_RECORDED = (('camera_info', 'sensor_msgs/msg/CameraInfo'), ('pose', 'ge
                      ('homography', 'matrix_msgs/msg/HomographyStamped'),
                      ('detections_2d', 'matrix_msgs/msg/Detection2DArray'))
 OVERLAY_RECORDED = ('overlay/compressed', 'sensor_msgs/msg/CompressedImage')   # with GraphSettings.overlay
+DRONE_NODES = ('calib', 'register')   # the nodes of a drone process (matrix_bringup.drone)
 
 
 @dataclass
@@ -51,6 +54,9 @@ class GraphSettings:
         'help': 'drones per calib and per register process: 1 = one process each per drone, in namespace /Dn '
                 '(as on one computer per drone); N > 1: processes calib_1, calib_2, ... with N drones each; '
                 '0 = one process each for all drones'})
+    drone_process: bool = field(default=True, metadata={
+        'help': "a drone's calib and register nodes in one process (drone): each image subscribed and decoded "
+                'once, its registration handed to calib in process; false: a calib and a register process'})
     calib_config: str = field(default='', metadata={
         'help': "calibration scene YAML (boards, intrinsics); empty: the shipped one for the dataset "
                 "(sim_<variant>.yaml for a simulated folder, else matrix_sample.yaml)"})
@@ -101,7 +107,9 @@ class GraphSettings:
 class NodeSpec:
     """One process of the graph: what ``launch_ros.actions.Node`` takes (and ``ros2 run`` would start).
 
-    ``param_files`` are ROS parameter YAML files applied first; ``parameters`` override them.
+    ``param_files`` are ROS parameter YAML files applied first; ``parameters`` override them. A process of
+    several nodes (``drone``) keeps their own names (``renamed`` false: ``__node`` would rename them all) and
+    takes ``remaps``, e.g. ``{'calib:__node': 'calib_2'}`` (a rule for the node named calib only).
     """
 
     package: str
@@ -110,6 +118,8 @@ class NodeSpec:
     namespace: str = ''
     parameters: dict = field(default_factory=dict)
     param_files: list = field(default_factory=list)
+    renamed: bool = True
+    remaps: dict = field(default_factory=dict)
 
     @property
     def label(self) -> str:
@@ -118,7 +128,9 @@ class NodeSpec:
 
     def ros_args(self) -> list:
         """Command-line form: ``--ros-args -r __node:=NAME [-r __ns:=/NS] [--params-file F] -p k:=v ...``."""
-        args = ['--ros-args', '-r', f'__node:={self.name}']
+        args = ['--ros-args', *(['-r', f'__node:={self.name}'] if self.renamed else [])]
+        for rule in self.remaps.items():
+            args += ['-r', ':='.join(rule)]
         if self.namespace:
             args += ['-r', f'__ns:=/{self.namespace}']
         for path in self.param_files:
@@ -203,6 +215,11 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
     for k, group in enumerate(groups, 1):
         ns = group[0] if size == 1 else ''
         suffix = f'_{k}' if size > 1 and len(groups) > 1 else ''
+        if s.drone_process:   # one process, the nodes keep their names: /Dn/calib, /Dn/register, calib_2, ...
+            nodes.append(NodeSpec('matrix_bringup', 'drone', f'drone{suffix}', ns,
+                                  {**calib, **register, 'views': group}, register_files, renamed=False,
+                                  remaps={f'{n}:__node': f'{n}{suffix}' for n in DRONE_NODES if suffix}))
+            continue
         nodes += [NodeSpec('matrix_calib', 'calib', f'calib{suffix}', ns, {**calib, 'views': group}),
                   NodeSpec('matrix_register', 'register', f'register{suffix}', ns, {**register, 'views': group},
                            register_files)]
@@ -223,8 +240,8 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
         nodes.append(NodeSpec('matrix_bringup', 'graph_monitor', 'graph_monitor', '', {
             'views': list(s.views), 'expected_frames': bag.frames, 'wait_for': ['register', 'calib', 'tracks'],
             'idle_timeout': s.lockstep_timeout, 'out_dir': s.monitor_out}))
-    # Every image topic is read by calib, register and fuse (the monitor reads raw images too).
-    readers = 3 + (1 if s.monitor and not bag.compressed else 0)
+    # Every image topic is read by calib and register (or drone) and fuse (the monitor reads raw images too).
+    readers = (2 if s.drone_process else 3) + (1 if s.monitor and not bag.compressed else 0)
     player = {'bag': s.bag, 'rate': s.rate, 'wait_for_subscribers': readers, 'lockstep': s.lockstep,
               'lockstep_timeout': s.lockstep_timeout, **({'topics': list(bag.topics)} if bag.topics else {})}
     if s.lockstep:

@@ -1,14 +1,12 @@
 """``calib``: per-drone camera calibration from the ground checkerboards, every frame (``matrix_core.calib``).
 
-Per drone ``V`` (``views``: several drones in one process; empty: one drone in the node's namespace), relative
-topics (``matrix_core.topics``): subscribes ``V/image_raw`` or ``V/image/compressed`` (``compressed``), optionally
-``V/<intrinsics_topic>`` (CameraInfo: only K, D and the size are used) and, with ``use_registration``,
-``V/homography``: each image waits up to ``registration_wait_s`` for the drone's registration of its stamp,
-whose implied camera then predicts the boards (without one, the image motion does; logged). Publishes
-``V/camera_info`` (``p = K [R | t]``, world -> pixels), ``V/pose`` (optical frame in ``world_frame``) and one
-``calib/V`` status per image on ``/diagnostics`` (ok/stale/failed, reprojection error, corners, age, latency,
-guide). Output stamp = image stamp; a stale frame republishes the last good pose (``publish_stale``); nothing
-is published before the first good pose; bad input is logged and reported, the node keeps running.
+Per drone ``V`` (``views``; empty: the drone of the node's namespace), relative topics: subscribes ``V/image_raw``
+or ``V/image/compressed`` (``compressed``), optionally ``V/<intrinsics_topic>`` (CameraInfo: K, D, size) and,
+with ``use_registration``, ``V/homography``: an image waits up to ``registration_wait_s`` for its registration,
+whose implied camera predicts the boards (else the image motion does). With register in one process
+(``matrix_ros.drone_link``) both come from register, the image decoded once. Publishes ``V/camera_info``
+(``p = K [R | t]``), ``V/pose``, a ``calib/V`` status per image on ``/diagnostics``, stamped as the image (stale:
+the last good pose, ``publish_stale``); bad input is reported, the node keeps running.
 """
 
 import time
@@ -32,15 +30,18 @@ from matrix_ros import diagnostics
 from matrix_ros.connect import SubscribeWhenConnected
 from matrix_ros.conversions import (ConversionError, camera_to_camera_info, camera_to_pose, msg_to_image,
                                     registration_from_msg, stamp_to_seconds)
+from matrix_ros.drone_link import DroneLink
 from matrix_ros.node_settings import hosted_drones
 from matrix_ros.params import declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
 
 
 class CalibNode(Node):
-    def __init__(self, defaults: CalibNodeSettings):
+    def __init__(self, defaults: CalibNodeSettings, link: DroneLink = None):
         super().__init__('calib')
-        self.settings = s = declare_settings(self, CalibNodeSettings, defaults)
+        # in one process with register (link), it hands over each decoded image and its registration
+        self.link = link.connect(self._on_image, self._on_registration) if link else DroneLink()
+        self.settings = s = declare_settings(self, CalibNodeSettings, defaults, shared=self.link.parameters)
         s.apply_threads()
         self.scene = load_scene(s.config)
         reference = MatrixDataset(s.prior_dataset) if s.prior_dataset else None
@@ -55,25 +56,27 @@ class CalibNode(Node):
                 self.create_subscription(CameraInfo, topics.drone_topic(prefix, s.intrinsics_topic),
                                          lambda m, v=view: self._on_intrinsics(v, m), 10)
             self._subscribe(view, prefix)
-        if s.use_registration:   # registration waits run on the wall clock: sim time stops in lockstep
-            self.create_timer(0.05, self._poll, clock=Clock(clock_type=ClockType.STEADY_TIME))
+        if s.use_registration:   # waits on the wall clock (sim time stops in lockstep), checked to 5 % of their length
+            period = min(1.0, max(0.05, s.registration_wait_s / 20))   # (20 Hz cost an idle node 3.6 % of a core)
+            self.create_timer(period, self._poll, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(f'calibrating {sorted(self.calibrators)} with {len(self.scene.boards)} boards'
                                + (', guided by their registrations' if s.use_registration else ''))
 
     def _subscribe(self, view: str, prefix: str) -> None:
-        """The drone's images; with ``use_registration`` also its registrations, and the images only once
-        those have a publisher (matrix_ros.connect)."""
+        """Its images, and registrations (``use_registration``; the images once those have a publisher)."""
         s = self.settings
+        if s.use_registration:
+            self.syncs[view] = FrameSynchronizer(FrameSyncSettings(['image', 'registration'], s.registration_wait_s,
+                                                                   restart_gap=s.restart_gap_s))
+        if self.link.shared:
+            return
 
         def subscribe_images():
-            msg_type = CompressedImage if s.compressed else Image
-            self.create_subscription(msg_type, topics.drone_topic(prefix, topics.image_stream(s.compressed)),
-                                     lambda m: self._on_image(view, m), qos_by_name(s.qos))
+            self.create_subscription(CompressedImage if s.compressed else Image, topics.drone_topic(
+                prefix, topics.image_stream(s.compressed)), lambda m: self._on_image(view, m), qos_by_name(s.qos))
         if not s.use_registration:
             subscribe_images()
             return
-        self.syncs[view] = FrameSynchronizer(FrameSyncSettings(['image', 'registration'], s.registration_wait_s,
-                                                               restart_gap=s.restart_gap_s))
         registrations = self.create_subscription(HomographyStamped, topics.drone_topic(prefix, topics.HOMOGRAPHY),
                                                  lambda m: self._on_registration(view, m), 10)
         self.connections[view] = SubscribeWhenConnected(self, view, [registrations], subscribe_images)
@@ -83,31 +86,29 @@ class CalibNode(Node):
             return initial_prior(self.scene, view, reference)
         except DatasetError as exc:
             self.get_logger().error(f'{view}: {exc}; every frame will be reported failed')
-            return None, None
+        return None, None
 
     def _on_intrinsics(self, view: str, msg: CameraInfo):
-        cal, size, d = self.calibrators[view], (int(msg.width), int(msg.height)), (list(msg.d) + [0.0] * 5)[:5]
+        size, d = (int(msg.width), int(msg.height)), (list(msg.d) + [0.0] * 5)[:5]
         try:
             K = check_intrinsics(msg.k, d, size, f'{view} CameraInfo')
+            if self.calibrators[view].set_intrinsics(K, d, size):
+                self.get_logger().info(f'{view}: intrinsics from {self.settings.intrinsics_topic}: fx {K[0, 0]:.2f}, '
+                                       f'{size[0]}x{size[1]}')
         except ValueError as exc:
             self.get_logger().error(f'{view}: CameraInfo intrinsics ignored: {exc}')
-            return
-        if cal.set_intrinsics(K, d, size):
-            self.get_logger().info(f'{view}: intrinsics from {self.settings.intrinsics_topic}: fx {K[0, 0]:.2f}, '
-                                   f'{size[0]}x{size[1]}')
 
-    def _on_image(self, view: str, msg):
-        received = time.perf_counter()
+    def _on_image(self, view: str, msg, image=None):
+        item = (msg, time.perf_counter(), image)   # image: decoded by register in this process, else None
         if view not in self.syncs:
-            self._calibrate(view, msg, received)
-            return
-        self._synced(view, self.syncs[view].add('image', stamp_to_seconds(msg.header.stamp), (msg, received),
-                                                time.monotonic()))
+            return self._calibrate(view, *item)
+        self._synced(view, self.syncs[view].add('image', stamp_to_seconds(msg.header.stamp), item, time.monotonic()))
 
     def _on_registration(self, view: str, msg: HomographyStamped):
-        sync, stamp = self.syncs[view], stamp_to_seconds(msg.header.stamp)
-        late = sync.late_items
-        frames = sync.add('registration', stamp, msg, time.monotonic())
+        sync, stamp = self.syncs.get(view), stamp_to_seconds(msg.header.stamp)
+        if sync is None:   # not guided by registrations (use_registration false)
+            return
+        late, frames = sync.late_items, sync.add('registration', stamp, msg, time.monotonic())   # late: before adding
         if sync.late_items > late:
             self.get_logger().warning(f'{view}: registration of t={stamp:.3f} s came after its image was '
                                       'calibrated without it; ignored')
@@ -123,20 +124,19 @@ class CalibNode(Node):
             if 'image' not in frame.items:
                 self.get_logger().warning(f'{view}: registration of t={frame.stamp:.3f} s without its image')
                 continue
-            msg = frame.items.get('registration')
-            registration = None if msg is None else registration_from_msg(msg)
-            if registration is None:
-                self.get_logger().warning(f'{view}: no registration of t={frame.stamp:.3f} s within '
-                                          f'{self.settings.registration_wait_s} s: calibrated from the image motion')
-            elif not registration.ok:
-                self.get_logger().warning(f'{view}: t={frame.stamp:.3f} s: registration {registration.status}: '
-                                          f'{registration.message}; calibrated from the image motion')
+            registration = registration_from_msg(frame.items['registration']) if 'registration' in frame.items else None
+            if registration is None or not registration.ok:
+                why = (f'no registration of t={frame.stamp:.3f} s within {self.settings.registration_wait_s} s:'
+                       if registration is None else
+                       f't={frame.stamp:.3f} s: registration {registration.status}: {registration.message};')
+                self.get_logger().warning(f'{view}: {why} calibrated from the image motion')
             self._calibrate(view, *frame.items['image'], registration)
 
-    def _calibrate(self, view: str, msg, received: float, registration=None):
+    def _calibrate(self, view: str, msg, received: float, image=None, registration=None):
         stamp = msg.header.stamp
         try:
-            result = self.calibrators[view].process(msg_to_image(msg), stamp_to_seconds(stamp), registration)
+            image = msg_to_image(msg) if image is None else image
+            result = self.calibrators[view].process(image, stamp_to_seconds(stamp), registration)
         except (ConversionError, ValueError) as exc:
             self.get_logger().error(f'{view}: image at {stamp_to_seconds(stamp):.3f} s skipped: {exc}')
             self._diagnose(view, stamp, diagnostics.ERROR, f'bad input: {exc}', {'status': 'bad_input'})

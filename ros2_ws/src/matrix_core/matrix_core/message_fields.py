@@ -41,6 +41,11 @@ def stamp_seconds(stamp) -> float:
     return int(stamp.sec) + int(stamp.nanosec) * 1e-9
 
 
+def stamp_ns(msg_header) -> int:
+    """A std_msgs/Header's stamp -> integer nanoseconds (exact)."""
+    return int(msg_header.stamp.sec) * 1_000_000_000 + int(msg_header.stamp.nanosec)
+
+
 # --- images -------------------------------------------------------------------------------------------
 _CHANNELS = {'bgr8': 3, 'rgb8': 3, 'mono8': 1, 'bgra8': 4, 'rgba8': 4}
 _TO_BGR = {'rgb8': cv2.COLOR_RGB2BGR, 'mono8': cv2.COLOR_GRAY2BGR, 'bgra8': cv2.COLOR_BGRA2BGR,
@@ -108,6 +113,18 @@ def image_from_msg(msg, reduction: int = 1) -> np.ndarray:
     if msg.encoding == 'bgr8':
         return img.copy()
     return cv2.cvtColor(img if channels > 1 else img[:, :, 0], _TO_BGR[msg.encoding])
+
+
+def gray_image_from_msg(msg) -> np.ndarray:
+    """sensor_msgs/Image or CompressedImage -> (H, W) grey uint8, full size. A JPEG is decoded straight to
+    grey (libjpeg then skips the colour upsampling and conversion: the cheapest full-size decode), for
+    consumers that use grey only (calib, register; ``matrix_ros.drone_link``)."""
+    if hasattr(msg, 'format') and len(msg.data) and is_jpeg(msg):
+        img = cv2.imdecode(_bytes(msg.data), cv2.IMREAD_GRAYSCALE)
+        if img is None:
+            raise ConversionError(f'corrupt compressed image ({msg.format!r}, {len(msg.data)} bytes)')
+        return img
+    return cv2.cvtColor(image_from_msg(msg), cv2.COLOR_BGR2GRAY)
 
 
 # --- cameras ------------------------------------------------------------------------------------------

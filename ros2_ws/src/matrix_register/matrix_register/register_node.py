@@ -3,9 +3,8 @@
 Per view ``V`` in ``views`` (several drones per process), relative topics (``matrix_core.topics``):
 
 - subscribes ``V/<image_topic>`` (sensor_msgs/Image, or CompressedImage on ``V/image/compressed`` when
-  ``compressed``), and ``V/<camera_info_topic>`` when no ``reference_dataset`` is configured (the images are
-  then subscribed once that stream has a publisher, so that no CameraInfo is lost at start-up:
-  ``matrix_ros.connect``);
+  ``compressed``), and ``V/<camera_info_topic>`` when no ``reference_dataset`` is configured (the images once
+  that stream has a publisher, so that no CameraInfo is lost at start-up: ``matrix_ros.connect``);
 - publishes ``V/homography`` (matrix_msgs/HomographyStamped, the message form of
   ``matrix_core.register.registration.Registration``, with the image's header stamp) and ``/diagnostics``
   (status, confidence, inliers, reference, re-keying).
@@ -14,7 +13,8 @@ Reference: ``reference_dataset``'s ``reference/`` image and calibration of ``V``
 ``matrix_tracker_meta.json`` also gives the obstacles, see ``matrix_core.register.scene``), or else the first
 image whose CameraInfo (``p = K [R | t]``) has the SAME stamp (``matrix_core.register.reference_pairing``).
 Failed and undecodable frames are published failed with their reason (never a made-up homography), so that
-the fuse node need not wait for them.
+the fuse node need not wait for them. In one process with calib (``matrix_ros.drone_link``) each image is
+decoded once, grey, and handed to calib with its registration.
 """
 
 from matrix_msgs.msg import HomographyStamped
@@ -31,21 +31,19 @@ from matrix_core.register.scene import settings_for_dataset
 from matrix_register.settings import RegisterNodeSettings
 from matrix_ros import diagnostics
 from matrix_ros.connect import SubscribeWhenConnected
-from matrix_ros.conversions import ConversionError, camera_info_to_camera, msg_to_image, registration_to_msg
+from matrix_ros.conversions import ConversionError, camera_info_to_camera, header_stamp_ns, registration_to_msg
+from matrix_ros.drone_link import DroneLink
 from matrix_ros.node_settings import hosted_drones
 from matrix_ros.params import declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
 from matrix_ros.restarts import DroneRestarts
 
 
-def _ns(stamp) -> int:
-    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
-
-
 class RegisterNode(Node):
-    def __init__(self, defaults: RegisterNodeSettings):
+    def __init__(self, defaults: RegisterNodeSettings, link: DroneLink = None):
         super().__init__('register')
-        self.settings = s = declare_settings(self, RegisterNodeSettings, defaults)
+        self.link = link or DroneLink()   # calib of the same process, if any (matrix_bringup.drone)
+        self.settings = s = declare_settings(self, RegisterNodeSettings, defaults, shared=self.link.parameters)
         s.apply_threads()
         self.backend = make_backend(s)
         self.registrars, self.pubs, self.connections, self.pairing = {}, {}, {}, {}
@@ -80,7 +78,7 @@ class RegisterNode(Node):
             return
         info = self.create_subscription(CameraInfo, topics.drone_topic(prefix, s.camera_info_topic),
                                         self.restarts.checked(view, lambda m: self._run(
-                                            view, self.pairing[view].camera_info(_ns(m.header.stamp), m))), 10)
+                                            view, self.pairing[view].camera_info(header_stamp_ns(m.header), m))), 10)
         self.connections[view] = SubscribeWhenConnected(self, view, [info], subscribe_images)
 
     def _start_drone(self, view: str) -> None:
@@ -93,14 +91,15 @@ class RegisterNode(Node):
 
     def _on_image(self, view: str, msg) -> None:
         try:
-            image = msg_to_image(msg)
+            image = self.link.decode(msg)
         except (ConversionError, ValueError) as exc:
-            self._publish(view, msg.header, Registration.failed(f'bad input: {exc}', backend=self.backend.name))
-            return
+            self.link.image(view, msg, None)   # calib tries itself and reports the bad input
+            return self._publish(view, msg.header, Registration.failed(f'bad input: {exc}', backend=self.backend.name))
+        self.link.image(view, msg, image)
         if view in self.registrars:
             self._register(view, msg, image)
         else:
-            self._run(view, self.pairing[view].image(_ns(msg.header.stamp), (msg, image)))
+            self._run(view, self.pairing[view].image(header_stamp_ns(msg.header), (msg, image)))
 
     def _run(self, view: str, steps: list) -> None:
         """Carry out the reference pairing's steps."""
@@ -132,7 +131,7 @@ class RegisterNode(Node):
 
     def _register(self, view: str, msg, image) -> None:
         try:
-            result = self.registrars[view].register(image, stamp_text(_ns(msg.header.stamp)))
+            result = self.registrars[view].register(image, stamp_text(header_stamp_ns(msg.header)))
         except ValueError as exc:
             self._publish(view, msg.header, Registration.failed(f'bad input: {exc}', backend=self.backend.name))
             return
@@ -141,11 +140,12 @@ class RegisterNode(Node):
     def _publish(self, view: str, header, result: Registration, measured: bool = False) -> None:
         """The registration (ok or failed) on V/homography, and its diagnostics (with the figures of a
         ``measured`` one, i.e. one the registrar computed)."""
-        self.pubs[view].publish(registration_to_msg(result, header))
+        self.pubs[view].publish(out := registration_to_msg(result, header))
+        self.link.registration(view, out)
         bad_input = result.message.startswith('bad input')
         if not result.ok:
             log = self.get_logger().error if bad_input else self.get_logger().warning
-            log(f'{view}: image at {stamp_text(_ns(header.stamp))} not registered: {result.message}')
+            log(f'{view}: image at {stamp_text(header_stamp_ns(header))} not registered: {result.message}')
         level = diagnostics.OK if result.ok else (diagnostics.ERROR if bad_input else diagnostics.WARN)
         text = 'ok' if result.ok else f'failed: {result.message}'
         values = () if not measured else (

@@ -12,15 +12,12 @@ from matrix_core.geometry.camera import Camera, pose_matrix
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 _T = TYPESTORE.types
+stamp_ns = fields.stamp_ns   # Header -> integer nanoseconds
 
 
 def header(stamp_ns: int, frame_id: str):
     return _T['std_msgs/msg/Header'](stamp=_T['builtin_interfaces/msg/Time'](
         sec=int(stamp_ns // 1_000_000_000), nanosec=int(stamp_ns % 1_000_000_000)), frame_id=frame_id)
-
-
-def stamp_ns(msg_header) -> int:
-    return int(msg_header.stamp.sec) * 1_000_000_000 + int(msg_header.stamp.nanosec)
 
 
 def image_msg(image: np.ndarray, hdr):
