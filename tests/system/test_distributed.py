@@ -45,6 +45,17 @@ def _wait(condition, timeout_s, what, procs):
         time.sleep(0.1)
 
 
+def _ended_cleanly(alive, players, logs, tag) -> dict:
+    """Assert nothing crashed, the players finished, no log has a traceback and no namespace is left behind;
+    returns the logs' texts by file name."""
+    logs_text = {p.name: p.read_text() for p in logs.glob('*.log')}
+    assert all(code is None for code in alive.values()), alive
+    assert all(p.returncode == 0 for p in players.values()), logs_text
+    assert not any('Traceback' in text for text in logs_text.values()), logs_text
+    assert namespaces(owner_pid=int(tag[3:])) == []
+    return logs_text
+
+
 def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
     bag = write_replay_bag(matrix_sample, tmp_path / 'bag', VIEWS, back_and_forth(5, FRAMES))
     settings = GraphSettings(bag=str(bag), dataset=str(matrix_sample), views=VIEWS, lockstep=False, rate=RATE,
@@ -71,12 +82,8 @@ def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
         udp = {h: hosts.udp_errors(h) for h in hosts.hosts}
         hosts.stop_all()
         tag = hosts.tag
-    logs_text = {p.name: p.read_text() for p in logs.glob('*.log')}
     print('UDP receive errors per host:', udp)
-    assert all(code is None for code in alive.values()), alive   # nothing crashed
-    assert all(p.returncode == 0 for p in players.values()), logs_text
-    assert not any('Traceback' in text for text in logs_text.values()), logs_text
-    assert namespaces(owner_pid=int(tag[3:])) == []
+    logs_text = _ended_cleanly(alive, players, logs, tag)
 
     domain = int(os.environ.get('ROS_DOMAIN_ID', '0'))
     assert not any(7400 + 250 * domain in p for p in ports.values()), ports   # RTPS well-known ports
@@ -136,11 +143,7 @@ def test_throttled_link_and_fuse_restarted(matrix_sample, tmp_path):
         alive = {label: p.poll() for label, p in procs.items() if label not in players}
         hosts.stop_all()
         tag = hosts.tag
-    logs_text = {p.name: p.read_text() for p in logs.glob('*.log')}
-    assert all(code is None for code in alive.values()), alive
-    assert all(p.returncode == 0 for p in players.values()), logs_text
-    assert not any('Traceback' in text for text in logs_text.values()), logs_text
-    assert namespaces(owner_pid=int(tag[3:])) == []
+    logs_text = _ended_cleanly(alive, players, logs, tag)
 
     lines = read_probe(logs / 'ground_probe.log')
     tracks = {line['stamp']: line for line in lines if line['kind'] == 'tracks'}
@@ -187,11 +190,7 @@ def test_discovery_server_without_multicast(matrix_sample, tmp_path):
         alive = {label: p.poll() for label, p in procs.items() if label not in players}
         hosts.stop_all()
         tag = hosts.tag
-    logs_text = {p.name: p.read_text() for p in logs.glob('*.log')}
-    assert all(code is None for code in alive.values()), alive
-    assert all(p.returncode == 0 for p in players.values()), logs_text
-    assert not any('Traceback' in text for text in logs_text.values()), logs_text
-    assert namespaces(owner_pid=int(tag[3:])) == []
+    _ended_cleanly(alive, players, logs, tag)
 
     domain = int(os.environ.get('ROS_DOMAIN_ID', '0'))
     assert SERVER_PORT in ports['ground'], ports   # the server listens on the ground ...
