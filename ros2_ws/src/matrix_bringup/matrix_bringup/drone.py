@@ -19,6 +19,7 @@ from matrix_register.settings import RegisterNodeSettings
 from matrix_ros.drone_link import DroneLink
 from matrix_ros.params import spin_nodes
 
+
 def main(argv=None) -> int:
     link = DroneLink([name for cls in (CalibNodeSettings, RegisterNodeSettings) for name, *_ in settings_fields(cls)])
     # register first: calib connects to the link before any image can arrive (nothing spins until both exist)
