@@ -109,7 +109,7 @@ def test_offset_heads_overfit_a_few_frames(matrix_sample):
         item = data[k]
         zero[k] = (float(item['offset'][:, item['center_mask'][0] > 0].abs().mean()),
                    float(item['tracking'][:, item['tracking_mask'][0] > 0].abs().mean()))
-    for step in range(120):
+    for step in range(200):
         terms = training_step(model, [data], [(0, 1 + step % 2)], config, rng)
         opt.zero_grad()
         terms['total'].backward()
