@@ -25,20 +25,15 @@ def main(argv=None) -> int:
     os.environ.pop('ROS_DISCOVERY_SERVER', None)   # it would make this participant a client
 
     import rclpy
-    from rclpy.executors import ExternalShutdownException
 
-    rclpy.init()
-    node = rclpy.create_node('discovery_server')
-    node.get_logger().info(f"discovery server up ({os.environ['FASTRTPS_DEFAULT_PROFILES_FILE']})")
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    from matrix_ros.params import spin_nodes   # imported after the environment is set: it loads rclpy
 
+    def server():
+        node = rclpy.create_node('discovery_server')
+        node.get_logger().info(f"discovery server up ({os.environ['FASTRTPS_DEFAULT_PROFILES_FILE']})")
+        return node
+
+    return spin_nodes([server], [sys.argv[0]], description=__doc__)
 
 if __name__ == '__main__':
     sys.exit(main())
