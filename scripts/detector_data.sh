@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Simulate the sequences of the default detector's recipe (bev/configs/detector.yaml names the same commands):
-# training (seeds 101-103), validation (111, 112), tracker validation (113, 114: longer sequences on which
+# training (complex seeds 101-108 and modified seeds 121-124, 60 frames each: twelve randomised looks of the
+# scene, lighting, floor, backdrop and distractors, which are drawn once per sequence), validation (111, 112), tracker validation (113, 114: longer sequences on which
 # the tracker settings are chosen, scripts/tune_tracker.py) and held-out test (201, 202) sequences into data/.
 # Complete folders are kept, partial ones regenerated. Usage: bash scripts/detector_data.sh [train|val|trackval|test ...]
 set -euo pipefail
@@ -16,8 +17,8 @@ sim() {  # variant frames seed name
 }
 for s in "${sets[@]}"; do
   case "$s" in
-    train) sim complex 250 101 complex_train_s101; sim complex 200 102 complex_train_s102
-           sim modified 150 103 modified_train_s103 ;;
+    train) for seed in 101 102 103 104 105 106 107 108; do sim complex 60 $seed complex_train_s$seed; done
+           for seed in 121 122 123 124; do sim modified 60 $seed modified_train_s$seed; done ;;
     val)   sim complex 30 111 complex_val_s111; sim modified 30 112 modified_val_s112 ;;
     trackval) sim complex 60 113 complex_trackval_s113; sim modified 60 114 modified_trackval_s114 ;;
     test)  sim complex 60 201 complex_test_s201; sim modified 60 202 modified_test_s202 ;;

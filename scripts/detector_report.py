@@ -11,6 +11,9 @@ Rows per checkpoint (see README "The detector" for the protocol):
 ``corner fp`` counts detections within 2 m of a corner of the area that match no person (the real scene's
 posts with spheres stand there).
 
+``validation.png`` draws each seed's validation MODA per sequence and epoch from the training history beside its
+checkpoint (``detector_seedN.history.json``), the exported (selected) epoch marked.
+
 Usage: python scripts/detector_report.py [--checkpoints A.pt B.pt ...] [--out out/detector_report]
 (default: every matrix_core/bev/checkpoints/detector_seed*.pt). Data: bash scripts/detector_data.sh test.
 """
@@ -28,7 +31,7 @@ import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
 import matrix_core.bev  # noqa: E402
-from matrix_core.bev.checkpoint import load_model  # noqa: E402
+from matrix_core.bev.checkpoint import load_checkpoint, load_model  # noqa: E402
 from matrix_core.bev.data import BevFrames  # noqa: E402
 from matrix_core.bev.evaluation import evaluate  # noqa: E402
 
@@ -100,6 +103,45 @@ def heatmap_png(path: Path, panels: list, grid) -> None:
     plt.close(fig)
 
 
+def validation_png(path: Path, checkpoints: list) -> bool:
+    """Validation MODA per sequence over the epochs of each checkpoint's training history (``X.history.json``
+    beside ``X.pt``), one panel per checkpoint, the exported epoch (``epoch`` in the checkpoint) dashed.
+    False when no checkpoint has a history with per-sequence validation (histories before it was logged)."""
+    import matplotlib
+
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+    panels = []
+    for ckpt in checkpoints:
+        history_path = ckpt.with_suffix('.history.json')
+        if not history_path.is_file():
+            continue
+        history = [h for h in json.loads(history_path.read_text()) if 'val_score' in h]
+        labels = sorted({k[len('val_moda['):-1] for h in history for k in h if k.startswith('val_moda[')})
+        if history and labels:
+            panels.append((ckpt.stem, history, labels, load_checkpoint(ckpt).get('epoch')))
+    if not panels:
+        return False
+    fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), 3.8), dpi=100, squeeze=False, sharey=True)
+    for ax, (name, history, labels, chosen) in zip(axes[0], panels):
+        epochs = [h['epoch'] for h in history]
+        for label in labels:
+            ax.plot(epochs, [100 * h.get(f'val_moda[{label}]', np.nan) for h in history], marker='o', label=label)
+        ax.plot(epochs, [100 * h['val_score'] for h in history], 'k-', lw=2, label='val_score (selects)')
+        if chosen is not None:
+            ax.axvline(chosen, color='grey', ls='--')
+        ax.set_title(f'{name}: exported epoch {chosen}', fontsize=9)
+        ax.set_xlabel('epoch')
+        ax.grid(alpha=0.3)
+    axes[0][0].set_ylabel('validation MODA (%)')
+    axes[0][0].legend(fontsize=7, loc='lower right')
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, bbox_inches='tight')
+    plt.close(fig)
+    return True
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument('--checkpoints', nargs='*', type=Path,
@@ -108,7 +150,7 @@ def main(argv=None) -> int:
     p.add_argument('--frame', type=int, default=2, help='real frame drawn in heatmaps.png')
     args = p.parse_args(argv)
     if not args.checkpoints:
-        sys.exit('no checkpoints (train first: bash scripts/train_detector.sh 0 1)')
+        sys.exit('no checkpoints (train first: bash scripts/train_detector.sh 0 1 2)')
     torch.set_num_threads(1)
     args.out.mkdir(parents=True, exist_ok=True)
     table, panels, grid = {}, [], None
@@ -140,7 +182,8 @@ def main(argv=None) -> int:
                                                      indent=1))
     if panels:
         heatmap_png(args.out / 'heatmaps.png', panels, grid)
-    print(f'wrote {args.out}/report.md, report.json, heatmaps.png')
+    curves = validation_png(args.out / 'validation.png', args.checkpoints)
+    print(f'wrote {args.out}/report.md, report.json, heatmaps.png' + (', validation.png' if curves else ''))
     return 0
 
 

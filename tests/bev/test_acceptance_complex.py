@@ -16,7 +16,7 @@ from matrix_core.cli.main import main
 from matrix_core.fusion.settings import shipped_checkpoint
 
 CHECKPOINT = shipped_checkpoint()
-SEED = 31            # configs/detector.yaml trains on 101-103, validates on 111-112, tests on 201-202
+SEED = 31            # configs/detector.yaml trains on 101-108 and 121-124, validates on 111-114, tests on 201-202
 FRAMES = 30
 DROPPED = ('D2', 'D6')
 

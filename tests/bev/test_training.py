@@ -135,3 +135,29 @@ def test_offset_heads_overfit_a_few_frames(matrix_sample):
           f'cell centres {np.median(nearest(cells)):.3f} m')
     assert len(dets) >= 0.9 * len(truth)
     assert np.median(nearest(dets.xy)) < 0.6 * np.median(nearest(cells))
+
+
+def test_validation_record_weights_the_selection_score():
+    from types import SimpleNamespace
+
+    from matrix_core.bev.training import validation_record
+
+    def result(moda, mota, idf1):
+        return SimpleNamespace(detection=SimpleNamespace(moda=moda), tracking=SimpleNamespace(mota=mota, idf1=idf1))
+
+    specs = [SequenceSpec('data/sim_a'), SequenceSpec('data/sim_b'), SequenceSpec('/x/matrix_sample', weight=2.0)]
+    record = validation_record(specs, [result(0.9, 0.8, 0.7), result(0.7, 0.6, 0.5), result(0.5, 0.4, 0.3)])
+    assert record['val_moda'] == pytest.approx(0.7) and record['val_idf1'] == pytest.approx(0.5)
+    assert record['val_moda[matrix_sample]'] == 0.5 and record['val_mota[sim_a]'] == 0.8
+    assert record['val_score'] == pytest.approx((0.9 + 0.7 + 2 * 0.5) / 4)     # not the plain mean 0.7
+    with pytest.raises(ValueError, match='weight'):
+        SequenceSpec('data/sim_a', weight=-1.0)
+
+
+def test_shipped_detector_recipe_validates_every_epoch_with_the_real_frames_weighted():
+    config = load_config('detector')
+    assert config.validate_every == 1
+    real = [s for s in config.val if s.label == 'matrix_sample']
+    assert len(real) == 1 and real[0].weight == sum(s.weight for s in config.val if s is not real[0])
+    assert len({s.path for s in config.train}) == len(config.train) >= 12
+    assert not {s.path for s in config.train} & {s.path for s in config.val}

@@ -22,6 +22,16 @@ class SequenceSpec:
     calibration: str = 'ground_truth'
     views: list = None             # None: all views
     calibration_dir: str = None    # output of matrix-tracker calibrate/register (pnp/registration sources)
+    weight: float = 1.0            # validation only: its weight in the checkpoint-selection score (val_score)
+
+    def __post_init__(self):
+        if not self.weight >= 0:
+            raise ValueError(f'{self.path}: weight must be >= 0, got {self.weight}')
+
+    @property
+    def label(self) -> str:
+        """Short name of the sequence in logs: its folder name."""
+        return Path(self.path).name
 
     def frame_list(self, available) -> list:
         if self.frames is None:

@@ -105,9 +105,24 @@ def training_step(model, sequences, picks, config: TrainConfig, rng) -> dict:
     return bev_loss(out, targets, config.loss_weights)
 
 
+def validation_record(specs: list, results: list) -> dict:
+    """History entries of one validation: the plain means ``val_moda``, ``val_mota``, ``val_idf1`` over the
+    sequences, each sequence's ``val_moda[LABEL]`` / ``val_mota[LABEL]`` / ``val_idf1[LABEL]``, and
+    ``val_score``, the MODA averaged with each spec's ``weight``: what selects ``best.pt``."""
+    record = {}
+    for key, get in (('moda', lambda r: r.detection.moda), ('mota', lambda r: r.tracking.mota),
+                     ('idf1', lambda r: r.tracking.idf1)):
+        record[f'val_{key}'] = float(np.mean([get(r) for r in results]))
+        record.update({f'val_{key}[{spec.label}]': float(get(r)) for spec, r in zip(specs, results)})
+    weights = np.array([spec.weight for spec in specs], dtype=float)
+    modas = np.array([r.detection.moda for r in results])
+    record['val_score'] = float(weights @ modas / weights.sum()) if weights.sum() > 0 else float(modas.mean())
+    return record
+
+
 def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: bool = True, log=print) -> list:
     """Train; returns the history (one dict per epoch). Writes ``last.pt`` every epoch, ``best.pt`` at the
-    best validation MODA, ``history.json``; ``resume`` continues from ``last.pt`` (same config)."""
+    best ``val_score`` (validation MODA weighted per sequence, :func:`validation_record`), ``history.json``; ``resume`` continues from ``last.pt`` (same config)."""
     from tqdm import tqdm
 
     out_dir = Path(out_dir or config.out_dir)
@@ -159,11 +174,9 @@ def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: boo
         if val_sequences and ((epoch + 1) % config.validate_every == 0 or epoch + 1 == config.epochs):
             model.eval()
             results = [evaluate(model, s, config.tracker, progress=progress) for s in val_sequences]
-            record['val_moda'] = float(np.mean([r.detection.moda for r in results]))
-            record['val_mota'] = float(np.mean([r.tracking.mota for r in results]))
-            record['val_idf1'] = float(np.mean([r.tracking.idf1 for r in results]))
-            if record['val_moda'] > best:
-                best = record['val_moda']
+            record.update(validation_record(config.val, results))
+            if record['val_score'] > best:
+                best = record['val_score']
                 save_checkpoint(out_dir / 'best.pt', model, config.bev, epoch=epoch + 1, metrics=record)
         history.append(record)
         log(' '.join(f'{k}={v:.4f}' if isinstance(v, float) else f'{k}={v}' for k, v in record.items()))

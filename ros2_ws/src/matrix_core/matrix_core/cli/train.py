@@ -1,7 +1,8 @@
 """``matrix-tracker train --config CONFIG``: train the BEV fusion network on MATRIX-format folders.
 
 CONFIG is a YAML file or the name of a shipped config (``matrix_core/bev/configs``: sample, complex).
-Writes ``last.pt`` (every epoch, for --resume), ``best.pt`` (best validation MODA) and ``history.json``.
+Writes ``last.pt`` (every epoch, for --resume), ``best.pt`` (best validation score, ``val_score``: MODA
+weighted per validation sequence) and ``history.json`` (per epoch: losses, each validation sequence's MODA, MOTA, IDF1).
 """
 
 
@@ -18,8 +19,8 @@ def add_parser(subparsers) -> None:
                    'to PATH (how the shipped checkpoints/*.pt are made; with --resume on a finished run it '
                    'only exports)')
     p.add_argument('--export-from', choices=('last', 'best'), default='last',
-                   help='which checkpoint --export writes: the last epoch, or best.pt (highest mean validation '
-                        'MODA: the model-selection protocol of the shipped default, README "Model selection")')
+                   help='which checkpoint --export writes: the last epoch, or best.pt (highest validation score '
+                        'val_score: the model-selection protocol of the shipped default, README "Model selection")')
     p.set_defaults(func=run)
 
 
