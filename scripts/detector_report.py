@@ -12,7 +12,8 @@ Rows per checkpoint (see README "The detector" for the protocol):
 posts with spheres stand there).
 
 ``validation.png`` draws each seed's validation MODA per sequence and epoch from the training history beside its
-checkpoint (``detector_seedN.history.json``), the exported (selected) epoch marked.
+checkpoint (``detector_seedN.history.json``), with the weight average of the last epochs as stars and the
+exported (selected) model in the title.
 
 Usage: python scripts/detector_report.py [--checkpoints A.pt B.pt ...] [--out out/detector_report]
 (default: every matrix_core/bev/checkpoints/detector_seed*.pt). Data: bash scripts/detector_data.sh test.
@@ -105,7 +106,7 @@ def heatmap_png(path: Path, panels: list, grid) -> None:
 
 def validation_png(path: Path, checkpoints: list) -> bool:
     """Validation MODA per sequence over the epochs of each checkpoint's training history (``X.history.json``
-    beside ``X.pt``), one panel per checkpoint, the exported epoch (``epoch`` in the checkpoint) dashed.
+    beside ``X.pt``), one panel per checkpoint, the weight average (if any) as stars after the last epoch.
     False when no checkpoint has a history with per-sequence validation (histories before it was logged)."""
     import matplotlib
 
@@ -117,21 +118,31 @@ def validation_png(path: Path, checkpoints: list) -> bool:
         history_path = ckpt.with_suffix('.history.json')
         if not history_path.is_file():
             continue
-        history = [h for h in json.loads(history_path.read_text()) if 'val_score' in h]
+        records = [h for h in json.loads(history_path.read_text()) if 'val_score' in h]
+        history = [h for h in records if 'averaged' not in h]
+        averaged = [h for h in records if 'averaged' in h]
         labels = sorted({k[len('val_moda['):-1] for h in history for k in h if k.startswith('val_moda[')})
         if history and labels:
-            panels.append((ckpt.stem, history, labels, load_checkpoint(ckpt).get('epoch')))
+            shipped = load_checkpoint(ckpt)
+            chosen = (f'average of epochs {shipped["averaged"][0]}-{shipped["averaged"][-1]}'
+                      if 'averaged' in shipped else f'epoch {shipped.get("epoch")}')
+            panels.append((ckpt.stem, history, labels, averaged[-1] if averaged else None, chosen))
     if not panels:
         return False
     fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), 3.8), dpi=100, squeeze=False, sharey=True)
-    for ax, (name, history, labels, chosen) in zip(axes[0], panels):
+    for ax, (name, history, labels, averaged, chosen) in zip(axes[0], panels):
         epochs = [h['epoch'] for h in history]
-        for label in labels:
-            ax.plot(epochs, [100 * h.get(f'val_moda[{label}]', np.nan) for h in history], marker='o', label=label)
+        for k, label in enumerate(labels):
+            colour = f'C{k}'
+            ax.plot(epochs, [100 * h.get(f'val_moda[{label}]', np.nan) for h in history], marker='o', color=colour,
+                    label=label)
+            if averaged is not None:     # the weight average, drawn half an epoch after the last
+                ax.plot(epochs[-1] + 0.5, 100 * averaged.get(f'val_moda[{label}]', np.nan), '*', ms=12, color=colour)
         ax.plot(epochs, [100 * h['val_score'] for h in history], 'k-', lw=2, label='val_score (selects)')
-        if chosen is not None:
-            ax.axvline(chosen, color='grey', ls='--')
-        ax.set_title(f'{name}: exported epoch {chosen}', fontsize=9)
+        if averaged is not None:
+            ax.plot(epochs[-1] + 0.5, 100 * averaged['val_score'], 'k*', ms=14, label='average of epochs '
+                    f'{averaged["averaged"][0]}-{averaged["averaged"][-1]} (*)')
+        ax.set_title(f'{name}: exported {chosen}', fontsize=9)
         ax.set_xlabel('epoch')
         ax.grid(alpha=0.3)
     axes[0][0].set_ylabel('validation MODA (%)')

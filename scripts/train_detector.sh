@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Train the default detector's recipe (bev/configs/detector.yaml) for the given seeds, one CPU thread each, all
 # at once (two seeds fit the two cores of the reference machine), and export each seed's best-on-validation
-# checkpoint with its training log next to it:
+# checkpoint with its training log next to it (a run stopped part way resumes from its last epoch, and its log goes
+# on in the same file, so the seeds may be trained across working sessions):
 #   matrix_core/bev/checkpoints/detector_seedN.pt, detector_seedN.log (per-epoch losses and validation),
 #   detector_seedN.history.json.
 # Usage: bash scripts/train_detector.sh 0 1   (data first: bash scripts/detector_data.sh)
@@ -14,7 +15,7 @@ pids=()
 for seed in "$@"; do
   out="out/train/detector_seed$seed"
   ( OMP_NUM_THREADS=1 PYTHONUNBUFFERED=1 matrix-tracker train --config detector --seed "$seed" --out "$out" --resume \
-      --export-from best --export "$ckpt/detector_seed$seed.pt" > "$out.log" 2> "$out.progress" \
+      --export-from best --export "$ckpt/detector_seed$seed.pt" >> "$out.log" 2>> "$out.progress" \
     && cp "$out.log" "$ckpt/detector_seed$seed.log" && cp "$out/history.json" "$ckpt/detector_seed$seed.history.json" \
     && echo "seed $seed: done, $ckpt/detector_seed$seed.pt" ) &
   pids+=($!)

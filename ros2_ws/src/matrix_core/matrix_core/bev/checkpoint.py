@@ -37,12 +37,15 @@ def load_model(path, settings_overrides: dict = None) -> tuple:
 
 def export_checkpoint(src, dst, trained_with: str = '') -> Path:
     """Write the shippable part of a training checkpoint (``model``, ``settings``, ``epoch``, ``history``,
-    ``trained_with``: no optimizer state, a third of the size) from ``src`` (e.g. ``last.pt``) to ``dst``."""
+    ``trained_with``, and ``averaged`` when it has one: no optimizer state, a third of the size) from ``src`` (e.g. ``last.pt``) to ``dst``."""
     ckpt = load_checkpoint(src)
     dst = Path(dst)
     dst.parent.mkdir(parents=True, exist_ok=True)
     tmp = dst.with_suffix(dst.suffix + '.tmp')
-    torch.save({'model': ckpt['model'], 'settings': ckpt['settings'], 'epoch': ckpt.get('epoch'),
-                'history': ckpt.get('history', []), 'trained_with': trained_with}, tmp)
+    shipped = {'model': ckpt['model'], 'settings': ckpt['settings'], 'epoch': ckpt.get('epoch'),
+               'history': ckpt.get('history', []), 'trained_with': trained_with}
+    if 'averaged' in ckpt:      # weights averaged over these epochs (bev/averaging.py)
+        shipped['averaged'] = ckpt['averaged']
+    torch.save(shipped, tmp)
     tmp.replace(dst)
     return dst

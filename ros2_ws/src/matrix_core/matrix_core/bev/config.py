@@ -65,6 +65,11 @@ class TrainConfig:
     validate_every: int = 1        # epochs
     out_dir: str = 'out/train'
     cache_images: bool = True
+    # Weight averaging (bev/averaging.py): after the last epoch, the mean of the weights of the last
+    # ``average_epochs`` epochs, batch-norm statistics measured again over ``bn_samples`` training samples,
+    # validated like an epoch (``averaged.pt``; it becomes best.pt when its val_score is the highest). 0: off.
+    average_epochs: int = 0
+    bn_samples: int = 200
 
     def __post_init__(self):
         if not self.train:
@@ -76,6 +81,9 @@ class TrainConfig:
         unknown = set(self.loss_weights) - {'heatmap', 'offset', 'tracking'}
         if unknown:
             raise ValueError(f'config: unknown loss_weights {sorted(unknown)}; allowed heatmap, offset, tracking')
+        if not 0 <= self.average_epochs <= self.epochs or self.bn_samples < 1:
+            raise ValueError(f'config: average_epochs must be in [0, epochs] and bn_samples >= 1, got '
+                             f'{self.average_epochs}, {self.bn_samples}')
         if not 0 <= self.view_dropout < 1:
             raise ValueError(f'config: view_dropout must be in [0, 1), got {self.view_dropout}')
 

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from matrix_core.bev.averaging import average_state_dicts, recompute_batch_norm
 from matrix_core.bev.checkpoint import load_checkpoint, save_checkpoint
 from matrix_core.bev.config import TrainConfig
 from matrix_core.bev.data import BevFrames
@@ -183,5 +184,41 @@ def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: boo
         save_checkpoint(last, model, config.bev, optimizer=optimizer.state_dict(), epoch=epoch + 1,
                         history=history, best=best, torch_rng=torch.get_rng_state(),
                         config=json.loads(json.dumps(dataclasses.asdict(config), default=str)))
+        if config.average_epochs:
+            save_checkpoint(out_dir / f'epoch{epoch + 1}.pt', model, config.bev, epoch=epoch + 1)
+        (out_dir / 'history.json').write_text(json.dumps(history, indent=2))
+    if config.average_epochs and not any('averaged' in h for h in history):
+        record = average_last_epochs(config, out_dir, sequences, val_sequences, best, progress)
+        history.append(record)
+        log(' '.join(f'{k}={v:.4f}' if isinstance(v, float) else f'{k}={v}' for k, v in record.items()))
         (out_dir / 'history.json').write_text(json.dumps(history, indent=2))
     return history
+
+
+def average_last_epochs(config: TrainConfig, out_dir: Path, sequences: list, val_sequences: list, best: float,
+                        progress: bool = True) -> dict:
+    """The mean of the weights of the last ``config.average_epochs`` epochs (``out_dir/epochN.pt``), its
+    batch-norm statistics measured over ``config.bn_samples`` training steps (augmented, views dropped, as
+    in training; seeded), written to ``averaged.pt`` and, when its ``val_score`` beats ``best`` (the best
+    epoch's), to ``best.pt``. Returns its history record: ``epoch`` (the last), ``averaged`` (the epochs) and
+    the validation entries of :func:`validation_record`."""
+    epochs = list(range(config.epochs - config.average_epochs + 1, config.epochs + 1))
+    missing = [e for e in epochs if not (out_dir / f'epoch{e}.pt').is_file()]
+    if missing:
+        raise FileNotFoundError(f'weight averaging needs {out_dir}/epochN.pt of epochs {missing} (written by a '
+                                'run with average_epochs set)')
+    model = build_model(config.bev.model, temporal=config.bev.temporal)
+    model.load_state_dict(average_state_dicts([load_checkpoint(out_dir / f'epoch{e}.pt')['model'] for e in epochs]))
+    rng = np.random.default_rng(config.seed * 1000 + config.epochs)
+    index = [(si, k) for si, s in enumerate(sequences) for k in range(len(s))]
+    picks = [index[i] for i in rng.permutation(len(index))[:config.bn_samples]]
+    recompute_batch_norm(model, lambda m: [training_step(m, sequences, [p], config, rng) for p in picks])
+    record = {'epoch': config.epochs, 'averaged': epochs}
+    if val_sequences:
+        model.eval()
+        record.update(validation_record(config.val, [evaluate(model, s, config.tracker, progress=progress)
+                                                     for s in val_sequences]))
+    save_checkpoint(out_dir / 'averaged.pt', model, config.bev, epoch=config.epochs, averaged=epochs, metrics=record)
+    if record.get('val_score', -np.inf) > best:
+        save_checkpoint(out_dir / 'best.pt', model, config.bev, epoch=config.epochs, averaged=epochs, metrics=record)
+    return record
