@@ -6,7 +6,7 @@ and grid) and training samples per second. Uses the real MATRIX sample's images 
                                 [--width 480 --height 272 --cell-m 0.25] [--checkpoint CKPT]
 
 ``--checkpoint`` times a trained model at the input size and grid it was trained with (e.g. the shipped
-``matrix_core/bev/checkpoints/detector_seed0.pt``); the defaults are BevSettings' defaults.
+``matrix_core/bev/checkpoints/detector_seed1.pt``); the defaults are BevSettings' defaults.
 """
 
 import argparse

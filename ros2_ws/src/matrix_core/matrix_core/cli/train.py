@@ -35,7 +35,9 @@ def run(args) -> int:
     config = load_config(args.config, overrides)
     history = train(config, args.out, resume=args.resume)
     out = Path(args.out or config.out_dir)
-    print(f'done: {len(history)} epochs, checkpoints in {out}')
+    epochs = [h for h in history if 'averaged' not in h]
+    averaged = ' and the weight average of the last ones' if len(epochs) < len(history) else ''
+    print(f'done: {len(epochs)} epochs{averaged}, checkpoints in {out}')
     if args.export:
         from matrix_core.bev.checkpoint import export_checkpoint
 

@@ -11,8 +11,8 @@ INPUT_KINDS = ('homography', 'camera_info')
 IMAGE_KINDS = ('raw', 'compressed', 'both')
 
 
-# The default detector (README "The detector"): bev/configs/detector.yaml, seed 0, selected on validation.
-DEFAULT_CHECKPOINT = 'detector_seed0.pt'
+# The default detector (README "The detector"): bev/configs/detector.yaml, seed 1, selected on validation.
+DEFAULT_CHECKPOINT = 'detector_seed1.pt'
 
 
 def shipped_checkpoint(name: str = DEFAULT_CHECKPOINT) -> Path:
@@ -44,7 +44,7 @@ class FuseSettings(TrackerSettings):
     min_confidence: float = field(default=0.0, metadata={
         'help': 'homographies with a lower registration confidence are treated as missing'})
     checkpoint: str = field(default='', metadata={
-        'help': 'BEV model checkpoint (.pt); empty: the shipped default matrix_core/bev/checkpoints/detector_seed0.pt'})
+        'help': 'BEV model checkpoint (.pt); empty: the shipped default matrix_core/bev/checkpoints/detector_seed1.pt'})
     device: str = field(default='cpu', metadata={'help': 'torch device (the BEV runner decodes on the CPU)'})
     threads: int = field(default=1, metadata={'help': 'torch and OpenCV CPU threads (1: one core, as benchmarked)'})
     area: list[float] = field(default_factory=lambda: list(MATRIX_AREA), metadata={
