@@ -10,6 +10,7 @@ from matrix_core.bev.averaging import average_state_dicts, recompute_batch_norm
 from matrix_core.bev.checkpoint import load_checkpoint
 from matrix_core.bev.config import load_config
 from matrix_core.bev.training import train
+from tiny_training import tiny_config
 
 
 def test_average_state_dicts_means_floats_and_keeps_the_last_counters():
@@ -42,21 +43,7 @@ def test_recompute_batch_norm_measures_the_plain_mean_of_what_it_is_shown():
 
 @pytest.mark.slow
 def test_training_ends_with_the_average_of_the_last_epochs(matrix_sample, tmp_path, monkeypatch):
-    monkeypatch.setenv('MATRIX_SHARED', str(matrix_sample.parent))
-    cfg = tmp_path / 'tiny.yaml'
-    cfg.write_text(f"""
-train:
-  - path: $MATRIX_SHARED/{matrix_sample.name}
-    frames: [0, 2]
-val:
-  - path: $MATRIX_SHARED/{matrix_sample.name}
-    frames: [3, 4]
-bev: {{model: bev_tiny, image_width: 160, image_height: 96, cell_m: 0.5}}
-epochs: 3
-average_epochs: 2
-bn_samples: 3
-seed: 5
-""")
+    cfg = tiny_config(tmp_path, matrix_sample, monkeypatch, 'epochs: 3\naverage_epochs: 2\nbn_samples: 3\nseed: 5\n')
     torch.set_num_threads(1)
     out = tmp_path / 'run'
     history = train(load_config(cfg), out, progress=False, log=lambda *_: None)

@@ -13,6 +13,7 @@ from matrix_core.bev.registry import build_model
 from matrix_core.bev.settings import BevSettings
 from matrix_core.bev.training import seed_everything, training_step
 from matrix_core.cli.main import main
+from tiny_training import tiny_config
 
 SETTINGS = BevSettings(model='bev_tiny', image_width=160, image_height=96, cell_m=0.5)
 
@@ -46,19 +47,7 @@ def test_training_steps_reduce_the_loss(matrix_sample):
 
 @pytest.mark.slow
 def test_train_resume_and_evaluate_cli(matrix_sample, tmp_path, monkeypatch, capsys):
-    monkeypatch.setenv('MATRIX_SHARED', str(matrix_sample.parent))
-    cfg = tmp_path / 'tiny.yaml'
-    cfg.write_text(f"""
-train:
-  - path: $MATRIX_SHARED/{matrix_sample.name}
-    frames: [0, 2]
-val:
-  - path: $MATRIX_SHARED/{matrix_sample.name}
-    frames: [3, 4]
-bev: {{model: bev_tiny, image_width: 160, image_height: 96, cell_m: 0.5}}
-epochs: 1
-seed: 3
-""")
+    cfg = tiny_config(tmp_path, matrix_sample, monkeypatch, 'epochs: 1\nseed: 3\n')
     out = tmp_path / 'run'
     assert main(['train', '--config', str(cfg), '--out', str(out)]) == 0
     assert main(['train', '--config', str(cfg), '--out', str(out), '--resume', '--epochs', '2',
