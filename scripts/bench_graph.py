@@ -26,6 +26,7 @@ register's resize).
     python scripts/bench_graph.py                              # both sequences, both modes, 1 run each
     python scripts/bench_graph.py --sequence sim --mode lockstep --runs 3
     python scripts/bench_graph.py --separate                   # the separate calib and register processes
+    python scripts/bench_graph.py --register_params FILE       # e.g. register.yaml with mode: reference
 
 Acceptance (issue 18): 8 drones, 1080p JPEG bags, this 2-core machine: lockstep >= 2 frames/s (milestone
 >= 1), realtime 2 Hz: no frame dropped, latency p95 <= 1 s.
@@ -211,6 +212,8 @@ def main() -> int:
     p.add_argument('--drones_per_process', type=int, default=1, help='1 = one process (or two: --separate) per drone')
     p.add_argument('--dds_profile', default='', help="Fast DDS profile XML for every process ('' = the environment's, "
                    "none = Fast DDS's own defaults)")
+    p.add_argument('--register_params', default='', help="register's ROS parameter file (default: matrix_register/"
+                   "config/register.yaml, the live graph's: mode track); e.g. one with mode: reference to compare")
     p.add_argument('--checkpoint', default='', help='BEV checkpoint (default: the fuse node default)')
     p.add_argument('--sample', default=os.environ.get('MATRIX_SHARED', str(ROOT.parent / 'shared')) + '/matrix_sample')
     p.add_argument('--out', default=str(ROOT / 'out/bench_graph'))
@@ -240,7 +243,7 @@ def main() -> int:
                     drone_process=not args.separate, checkpoint=args.checkpoint, monitor=True,
                     monitor_out=str(out / 'run' / 'monitor'), record=str(out / 'run' / 'recording'),
                     lockstep=mode == 'lockstep', lockstep_timeout=300.0, rate=period * args.hz,
-                    dds_profile=args.dds_profile)
+                    dds_profile=args.dds_profile, register_params=args.register_params)
                 facts = BagFacts.read(settings.bag, settings.views)
                 runs = [run_once(settings, facts, out / 'run') for _ in range(args.runs)]
                 label = mode if mode == 'lockstep' else f'realtime {args.hz:g} Hz'

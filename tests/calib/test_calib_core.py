@@ -7,17 +7,19 @@ import numpy as np
 import pytest
 
 from matrix_core.calib.assignment import assign_piece
+from matrix_core.calib.corner_tracking import track_corners
 from matrix_core.calib.detection import find_pieces
 from matrix_core.calib.drone_calibrator import FAILED, OK, STALE, DroneCalibrator
 from matrix_core.calib.evaluation import pose_errors
 from matrix_core.calib.grow import best_correction, saddle_map
 from matrix_core.calib.motion import GroundMotion
-from matrix_core.calib.regions import board_rectification, image_H_board
+from matrix_core.calib.regions import board_rectification, image_H_board, predict_boards
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.cli.main import main as cli_main
 from matrix_core.datasets import MatrixDataset, open_dataset
 from matrix_core.datasets import matrix_conventions as conv
+from matrix_core.geometry.camera import rotation_angle_deg
 
 cv2.setNumThreads(1)
 
@@ -129,6 +131,24 @@ def test_saddle_map_corrects_a_pose_one_square_off(dataset, scene):
         correction, count = best_correction(maps)
         assert correction == shift, (shift, correction)
         assert count > 300
+
+
+@pytest.mark.parametrize('view, frame', [('D1', 2), ('D5', 1)])
+def test_tracking_recovers_from_a_guide_a_fraction_of_a_square_off(dataset, scene, view, frame):
+    """A guide tilted 0.06 deg (what a registration tracked by flow gives) predicts the board rows 1-2 px off:
+    the strict first pass verifies too few saddles; the second try (track_start_move) gets the true pose."""
+    gray = cv2.cvtColor(dataset.load_image(view, frame), cv2.COLOR_BGR2GRAY)
+    truth = scene.camera(dataset.camera(view, frame).cam_T_world)
+    tilt = cv2.Rodrigues(np.array([np.deg2rad(0.06), 0.0, 0.0]))[0]   # about the camera's x axis, centre kept
+    T = truth.cam_T_world.copy()
+    T[:3, :3], T[:3, 3] = tilt @ truth.R, tilt @ truth.t
+    predicted = predict_boards(scene.boards, scene.camera(T))
+    strict, _ = track_corners(gray, scene, CalibSettings(track_start_move=0.15), predicted)
+    assert strict is None
+    fit, correction = track_corners(gray, scene, CalibSettings(), predicted)
+    assert fit is not None and correction == (0, 0)
+    assert rotation_angle_deg(fit.camera.R, truth.R) < 0.02
+    assert int(fit.inliers.sum()) > 200
 
 
 def test_tracker_follows_drone_5(dataset, scene):

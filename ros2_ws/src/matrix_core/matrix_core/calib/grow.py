@@ -27,7 +27,14 @@ from matrix_core.calib.settings import CalibSettings
 from matrix_core.geometry.camera import Camera, rotation_angle_deg
 
 GROW_SHIFT = 4  # largest whole-square correction considered (the initial prior can be squares off)
+# Tracking (corner_tracking) starts from a prediction a fraction of a square off, so at a pose solved from
+# its corrected saddles it checks slips of up to TRACK_VERIFY_SHIFT squares only: 25 x 25 instead of 29 x 29
+# corners refined per 19 x 19 board (the virtual corners beyond the board are ground, where cornerSubPix runs
+# all its iterations; measured: calib 45 -> 32 ms per frame on simulated complex). A search from a prior squares
+# off keeps GROW_SHIFT: its first correction can leave a residual slip (measured: 2 squares after (0, -4)).
+TRACK_VERIFY_SHIFT = 2
 SETTLED_DEG, SETTLED_M = 0.03, 0.015  # a re-solved pose this close to the last one has settled
+MAX_MOVE_SQUARES = 0.15  # a refined corner further than this from where a solved pose predicts it is no saddle
 
 
 @dataclass
@@ -45,7 +52,7 @@ class SaddleMap:
 
 
 def saddle_map(gray: np.ndarray, camera: Camera, board: Checkerboard, px_per_square: float = 10.0,
-               extend: int = 3, max_move_squares: float = 0.15, min_contrast: float = 20.0) -> SaddleMap:
+               extend: int = 3, max_move_squares: float = MAX_MOVE_SQUARES, min_contrast: float = 20.0) -> SaddleMap:
     """Refine and verify every corner predicted by ``camera`` from ``-extend`` to ``n - 1 + extend``."""
     lo_i, lo_j = -extend, -extend
     hi_i, hi_j = board.nx - 1 + extend, board.ny - 1 + extend
@@ -141,12 +148,14 @@ def corrected_correspondences(maps: list, correction: tuple) -> tuple:
     return np.concatenate(world) if world else np.zeros((0, 3)), np.concatenate(uv) if uv else np.zeros((0, 2))
 
 
-def _saddle_maps(gray: np.ndarray, camera: Camera, scene: CalibScene, settings: CalibSettings) -> list:
-    return [saddle_map(gray, camera, board, settings.px_per_square, extend=GROW_SHIFT + 1)
-            for board in scene.boards]
+def _saddle_maps(gray: np.ndarray, camera: Camera, scene: CalibScene, settings: CalibSettings,
+                 max_move_squares: float = MAX_MOVE_SQUARES, max_shift: int = GROW_SHIFT) -> list:
+    return [saddle_map(gray, camera, board, settings.px_per_square, extend=max_shift + 1,
+                       max_move_squares=max_move_squares) for board in scene.boards]
 
 
-def grow_pose(gray: np.ndarray, camera: Camera, scene: CalibScene, settings: CalibSettings, rounds: int = 1):
+def grow_pose(gray: np.ndarray, camera: Camera, scene: CalibScene, settings: CalibSettings, rounds: int = 1,
+              start_move: float = MAX_MOVE_SQUARES, verify_shift: int = GROW_SHIFT):
     """(PnPResult or None, whole-square correction or None when ambiguous) of the (H, W) grey image, from
     the rough pose ``camera``.
 
@@ -155,8 +164,11 @@ def grow_pose(gray: np.ndarray, camera: Camera, scene: CalibScene, settings: Cal
     With ``rounds`` > 1 the pose is solved again from the saddles verified at the new pose until it
     settles: a rough starting pose verifies only the corners it predicts to a fraction of a square, and
     corners refined in a view rectified with a wrong pose are biased towards it (measured: a start
-    0.2 deg off gave 0.1 deg after one round, 0.015 once settled). Each round is one more saddle pass."""
-    maps = _saddle_maps(gray, camera, scene, settings)
+    0.2 deg off gave 0.1 deg after one round, 0.015 once settled). Each round is one more saddle pass.
+    ``start_move``: the largest move (squares) of a verified corner in the first pass only, from ``camera``
+    (a prediction a fraction of a square off needs more than the 0.15 of the passes from solved poses).
+    ``verify_shift``: the largest whole-square slip checked at each solved pose."""
+    maps = _saddle_maps(gray, camera, scene, settings, start_move)
     correction, count = best_correction(maps, GROW_SHIFT)
     if correction is None or count < settings.min_corners:
         return None, correction
@@ -167,11 +179,14 @@ def grow_pose(gray: np.ndarray, camera: Camera, scene: CalibScene, settings: Cal
         if fit is None:
             return None, correction
         total = (total[0] + correction[0], total[1] + correction[1])
-        maps = _saddle_maps(gray, fit.camera, scene, settings)
-        correction, verified = best_correction(maps, GROW_SHIFT)
+        maps = _saddle_maps(gray, fit.camera, scene, settings, max_shift=verify_shift)
+        correction, verified = best_correction(maps, verify_shift)
         if correction != (0, 0):
             return None, None
-        settled = (verified <= count * 1.02 and rotation_angle_deg(fit.camera.R, previous.R) < SETTLED_DEG
+        # A fit from the looser first pass is never the answer: its corners may have converged off (measured:
+        # real D2 frame 0, 0.12 deg instead of 0.02); the next round solves from the strict saddles.
+        settled = ((round_ > 0 or start_move <= MAX_MOVE_SQUARES) and verified <= count * 1.02
+                   and rotation_angle_deg(fit.camera.R, previous.R) < SETTLED_DEG
                    and np.linalg.norm(fit.camera.center - previous.center) < SETTLED_M)
         if settled or round_ == rounds - 1:
             return fit, total

@@ -55,6 +55,12 @@ class CalibSettings(RestartSettings):
                 'skip the search when they give a plausible pose. That prior does not drift (every frame is '
                 'registered to the same reference): measured (bench_drone.py --registration-prior), every real '
                 'and simulated frame ok, worst 0.07 deg real, 0.15 / 0.21 deg simulated complex / modified'})
+    track_start_move: float = field(default=0.3, metadata={
+        'help': 'tracking (track_registered, track_corners): when the predicted corners verify too few saddles, '
+                'a second try whose first refinement accepts a corner that moved up to this many squares (the '
+                'first try and the rounds from solved poses: 0.15). '
+                'A tracked registration guides to about 0.05 deg, 1-2 px on boards whose rows are 3-6 px high: '
+                'with 0.15 real D7 frame 4 verified 5 of 351 corners and was lost, with 0.3 all 351'})
     registration_agreement_m: float = field(default=0.3, metadata={
         'help': "a pose whose camera centre is further than this from the one the frame's registration implies is "
                 'rejected (stale): two independent estimates disagree (measured: registrations within 3 cm, '
@@ -110,6 +116,8 @@ class CalibSettings(RestartSettings):
                 raise ValueError(f'{name} must be lsh or brute, got {getattr(self, name)!r}')
         if not 0 <= self.global_shift_scale <= 1:
             raise ValueError('global_shift_scale must be in [0, 1]')
+        if not 0.15 <= self.track_start_move < 0.5:
+            raise ValueError('track_start_move must be in [0.15, 0.5) squares (half a square reaches the next corner)')
         if not 0 < self.ambiguity_ratio < 1:
             raise ValueError('ambiguity_ratio must be in (0, 1)')
         for name in ('registration_agreement_m', 'ransac_threshold_px', 'max_reprojection_px', 'max_jump_m', 'max_jump_deg',
