@@ -30,7 +30,7 @@ GROW_SHIFT = 4  # largest whole-square correction considered (the initial prior 
 # Tracking (corner_tracking) starts from a prediction a fraction of a square off, so at a pose solved from
 # its corrected saddles it checks slips of up to TRACK_VERIFY_SHIFT squares only: 25 x 25 instead of 29 x 29
 # corners refined per 19 x 19 board (the virtual corners beyond the board are ground, where cornerSubPix runs
-# all its iterations; measured: calib 45 -> 32 ms per frame on simulated complex). A search from a prior squares
+# all its iterations; measured: calib 49 -> 39 ms per frame on simulated complex). A search from a prior squares
 # off keeps GROW_SHIFT: its first correction can leave a residual slip (measured: 2 squares after (0, -4)).
 TRACK_VERIFY_SHIFT = 2
 SETTLED_DEG, SETTLED_M = 0.03, 0.015  # a re-solved pose this close to the last one has settled
@@ -184,7 +184,7 @@ def grow_pose(gray: np.ndarray, camera: Camera, scene: CalibScene, settings: Cal
         if correction != (0, 0):
             return None, None
         # A fit from the looser first pass is never the answer: its corners may have converged off (measured:
-        # real D2 frame 0, 0.12 deg instead of 0.02); the next round solves from the strict saddles.
+        # real D2 frame 0, 0.12 deg instead of 0.06); the next round solves from the strict saddles.
         settled = ((round_ > 0 or start_move <= MAX_MOVE_SQUARES) and verified <= count * 1.02
                    and rotation_angle_deg(fit.camera.R, previous.R) < SETTLED_DEG
                    and np.linalg.norm(fit.camera.center - previous.center) < SETTLED_M)
