@@ -2,16 +2,19 @@
 """Distributed deployment benchmark (issue 22): the real sample over limited links, one host per drone.
 
 Each drone host (a network namespace, matrix_bringup.netns_harness) runs its own camera (the bag player with
-only its streams), register and calib; the ground host runs fuse and the recorder; every drone's link is
-limited by ``tc tbf`` to ``--rate_mbit`` (one run per rate given) with a 1 MB queue. The replay runs on the
-recorded timing (``--replay_rate`` 1 = 2 frames/s, the sample's clock), frames back and forth over the
-sample's 5 frames. Reported per rate: bytes per frame per drone across its link (each direction; the link
-counters from the first frame (1 s before) to the end divided by the frames played: images, geometry,
-diagnostics, DDS announcements and acknowledgements), the JPEG bytes per image, packets the limit dropped at the drones'
-end, latency image -> tracks (the first drone's image arriving at its own host -> /tracks at the ground,
-wall clock of one machine), frames with tracks, frames fused with all views and frames with an image lost
-(fuse says 'no image' for a drone: dropped on its link or later than the sync timeout). The first drone's
-link is also captured (matrix_bringup.link_capture): its bytes per frame by DDS stream, each direction.
+only its streams), register, calib and link_sender (the images it lets across, within ``--link_share`` of
+the link rate: the others dropped whole at the sender); the ground host runs fuse and the recorder; every
+drone's link is limited by ``tc tbf`` to ``--rate_mbit`` (one run per rate given) with a 1 MB queue. The
+replay runs on the recorded timing (``--replay_rate`` 1 = 2 frames/s, the sample's clock), frames back and
+forth over the sample's 5 frames. Reported per rate: bytes per frame per drone across its link (each
+direction; the link counters from the first frame (1 s before) to the end divided by the frames played:
+images, geometry, diagnostics, DDS announcements and acknowledgements), the JPEG bytes per image, frames
+link_sender dropped per drone (whole, before the link), packets the limit dropped at the drones' end,
+latency image -> tracks (the first drone's image arriving at its own host -> /tracks at the ground, wall
+clock of one machine), frames with tracks, frames fused with all views and frames with an image lost (fuse
+says 'no image' for a drone: dropped at the sender, on its link or later than the sync timeout). The first
+drone's link is also captured (matrix_bringup.link_capture): its bytes per frame by DDS stream, each
+direction.
 
 ``--find-min-rate``: the lowest link rate that keeps the replay rate: a run at the highest ``--rate_mbit``
 (the reference), then a bisection down to ``--resolution`` Mbit/s, starting just above what the reference
@@ -21,6 +24,7 @@ machine's CPU load). A benchmark, not a CI test; needs root.
 
     python scripts/bench_distributed.py                                  # 8 drones, 20 Mbit/s, 40 frames
     python scripts/bench_distributed.py --rate_mbit 20 12 8              # one run per rate
+    python scripts/bench_distributed.py --drones 2 --rate_mbit 8 --link_share 0   # no budget: the link drops
     python scripts/bench_distributed.py --drones 2 --frames 10 --find-min-rate   # the lowest rate at 2 Hz
     python scripts/bench_distributed.py --drones 2 --frames 10 --replay_rate 0.5   # a short run
     python scripts/bench_distributed.py --layout                         # what runs where, what crosses
@@ -45,7 +49,7 @@ def run_once(args, bag: Path, views: list, rate_mbit: float, out: Path) -> dict:
 
     settings = GraphSettings(bag=str(bag), dataset=str(args.dataset), views=views, lockstep=False,
                              rate=args.replay_rate, sync_timeout=args.sync_timeout, record=str(out / 'rec'))
-    d = deployment(settings, BagFacts.read(str(bag), views))
+    d = deployment(settings, BagFacts.read(str(bag), views), link_mbit=args.link_share * rate_mbit)
     logs = out / 'logs'
     with Hosts(views, rate_mbit=rate_mbit, multicast=args.discovery == 'multicast') as hosts:
         procs = start(d, hosts, logs, args.discovery, image_probes=views[:1], captures=views[:1],
@@ -68,6 +72,7 @@ def run_once(args, bag: Path, views: list, rate_mbit: float, out: Path) -> dict:
         hosts.stop_all()
     played = len(args.frame_list)
     fused = {line['stamp']: line for line in read_probe(logs / 'ground_probe.log') if line['kind'] == 'fuse'}
+    sender = [line for line in read_probe(logs / 'ground_probe.log') if line['kind'] == 'link']
     tracks = {line['stamp']: line['t'] for line in read_probe(logs / 'ground_probe.log') if line['kind'] == 'tracks'}
     images = {line['stamp']: line for line in read_probe(logs / f'{views[0]}_probe.log') if line['kind'] == 'image'}
     latency = np.array([tracks[s] - images[s]['t'] for s in images if s in tracks])
@@ -75,6 +80,7 @@ def run_once(args, bag: Path, views: list, rate_mbit: float, out: Path) -> dict:
     return {'streams': _per_frame(next(c for c in reversed(captured) if c['t'] <= before_t), captured[-1], played),
             'lost': sum(any('no image' in why for why in f['missing'].values()) for f in fused.values()),
         'rate_mbit': rate_mbit, 'frames': played, 'with_tracks': len(tracks),
+        'sender_dropped': sum(line['outcome'] == 'dropped' for line in sender) / len(views),
         'all_views': sum(f['views_used'] == len(views) for f in fused.values()),
         'up_kb': np.mean([(after[v]['up'][0] - before[v]['up'][0]) / played / 1e3 for v in views]),
         'down_kb': np.mean([(after[v]['down'][0] - before[v]['down'][0]) / played / 1e3 for v in views]),
@@ -149,16 +155,19 @@ def _round_up(x: float, step: float) -> float:
 def print_table(rows: list, views: list, args) -> None:
     print(f'\n{len(views)} drone hosts + ground, real sample frames back and forth, {len(args.frame_list)} frames '
           f'at {2 * args.replay_rate:g} frames/s, discovery {args.discovery}, sync_timeout {args.sync_timeout} s')
-    print('| Mbit/s per link | bytes/frame/drone up (down) | JPEG per image | tbf drops | latency image -> tracks '
-          'median / p95 / max | frames with tracks | fused with all views | frames with an image lost |')
-    print('| --- | --- | --- | --- | --- | --- | --- | --- |')
+    share = f'images within {args.link_share:.0%} of the link' if args.link_share else 'no image budget'
+    print(f'{share} (link_sender)')
+    print('| Mbit/s per link | bytes/frame/drone up (down) | JPEG per image | frames dropped at the sender, per drone '
+          '| tbf drops | latency image -> tracks median / p95 / max | frames with tracks | fused with all views '
+          '| frames with an image lost |')
+    print('| --- | --- | --- | --- | --- | --- | --- | --- | --- |')
     for r in rows:
         lat = r['latency']
         lat_text = (f'{np.median(lat) * 1e3:.0f} / {np.percentile(lat, 95) * 1e3:.0f} / {lat.max() * 1e3:.0f} ms'
                     if len(lat) else 'none')
         print(f"| {r['rate_mbit']:g} | {r['up_kb']:.0f} kB ({r['down_kb']:.1f} kB) | {r['jpeg_kb']:.0f} kB | "
-              f"{r['dropped']} | {lat_text} | {r['with_tracks']}/{r['frames']} | {r['all_views']}/{r['frames']} | "
-              f"{r['lost']}/{r['frames']} |")
+              f"{r['sender_dropped']:g}/{r['frames']} | {r['dropped']} | {lat_text} | {r['with_tracks']}/{r['frames']} | "
+              f"{r['all_views']}/{r['frames']} | {r['lost']}/{r['frames']} |")
     print(f"(ground UDP receive-buffer errors: {', '.join(str(r['rcvbuf_errors']) for r in rows)}; "
           f"players finished: {', '.join(str(r['players_ok']) for r in rows)})")
 
@@ -174,6 +183,9 @@ def main(argv=None) -> int:
     parser.add_argument('--frames', type=int, default=40, help='frames replayed (default 40: 20 s at 2 Hz)')
     parser.add_argument('--replay_rate', type=float, default=1.0, help='1 = the recorded 2 frames/s')
     parser.add_argument('--sync_timeout', type=float, default=1.0, help="fuse's wait for a late view (s)")
+    parser.add_argument('--link_share', type=float, default=0.9,
+                        help="share of each link's rate the images may use (link_sender's budget; the rest: "
+                             'geometry, diagnostics, discovery); 0: no budget, every frame is sent')
     parser.add_argument('--discovery', choices=tuple(DISCOVERY), default='multicast',
                         help='how hosts find each other (matrix_bringup.distributed.DISCOVERY)')
     parser.add_argument('--find-min-rate', dest='find_min_rate', action='store_true',

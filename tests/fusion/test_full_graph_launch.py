@@ -121,6 +121,11 @@ def test_ros_args_command_line():
                                '-p', 'views:=[D3]', '-p', 'compressed:=true', '-p', 'rate:=0.5',
                                '-p', 'config:=/x.yaml']
     assert spec.label == 'D3/calib'
+    # strings YAML would read as something else are quoted: a pattern in braces, a number, a boolean
+    spec = NodeSpec('matrix_bev_tracker', 'fuse', 'fuse', '', {'compressed_topic': '{view}/link/image/compressed',
+                                                               'name': '12', 'flag': 'true', "it's": "it's"})
+    assert spec.ros_args()[3:] == ['-p', "compressed_topic:='{view}/link/image/compressed'", '-p', "name:='12'",
+                                   '-p', "flag:='true'", '-p', "it's:=it's"]
 
 
 # --- the launch file, evaluated with the real launch API (tests/helpers/launch_files.py) -------------------

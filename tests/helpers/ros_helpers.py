@@ -56,10 +56,10 @@ def start_ros2(*args: str) -> subprocess.Popen:
 def finish(process: subprocess.Popen, timeout_s: float = 20.0) -> str:
     """Output of ``process`` once it exited; killed (no orphans) if it has not exited within ``timeout_s``."""
     try:
-        return process.communicate(timeout=timeout_s)[0]
+        return process.communicate(timeout=timeout_s)[0] or ''   # '' when not piped
     except subprocess.TimeoutExpired:
         _kill(process)
-        return process.communicate()[0] + '\n[killed: did not exit]'
+        return (process.communicate()[0] or '') + '\n[killed: did not exit]'
 
 
 def _kill(process: subprocess.Popen) -> None:

@@ -24,5 +24,6 @@ setup(
         'dataset_player = matrix_ros.dataset_player:main',
         'bag_player = matrix_ros.bag_player:main',
         'recorder = matrix_ros.recorder:main',
+        'link_sender = matrix_ros.link_sender:main',
     ]},
 )

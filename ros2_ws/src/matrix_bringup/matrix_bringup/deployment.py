@@ -3,16 +3,21 @@ drone's link, with the QoS of each stream and why. Built from the same :class:`~
 and :func:`~matrix_bringup.graph.graph_nodes` as the one-host graph; pure Python (tested with plain pytest).
 
     drone host Dn:  bag_player (only Dn's camera: image/compressed, ground_truth/camera_info)
-                    register, calib (namespace /Dn: bare stream names)
-         | link Dn: up   image/compressed (best effort), homography, camera_info, pose, /diagnostics (reliable)
+                    register, calib, link_sender (namespace /Dn: bare stream names)
+         | link Dn: up   link/image/compressed (link_sender: the frames the link budget carries, best effort),
+         |               homography, camera_info, pose, /diagnostics (reliable)
          |          down nothing but DDS discovery and acknowledgements
     ground host:    fuse, recorder, graph_monitor
 
 Differences from the one-host graph, each for the link: images cross compressed only (a raw 1080p frame is
-6.2 MB, 2.5 s at 20 Mbit/s); fuse reads them best effort (``qos: sensor_data``), so a slow or cut link drops
-frames instead of queueing old ones (a frame that arrives after its stamp was fused is refused anyway); the
-players run on the recorded timing (``lockstep`` off: a camera does not wait for the ground) and every host
-on its own clock (``use_sim_time`` off: no ``/clock`` across links; stamps are the bag's).
+6.2 MB, 2.5 s at 20 Mbit/s), and not as the camera's stream but through ``link_sender``
+(``matrix_core.link_gate``): on the drone, calib and register read every frame of the camera; across the
+link a frame leaves only once the link budget (``link_mbit``) has carried the ones before, the others are
+dropped whole at the sender, so a slow link neither queues old frames nor loses packets of every frame;
+fuse reads that stream best effort (``qos: sensor_data``: nothing is resent across the link; a frame that
+arrives after its stamp was fused is refused anyway). The players run on the recorded timing (``lockstep``
+off: a camera does not wait for the ground) and every host on its own clock (``use_sim_time`` off: no
+``/clock`` across links; stamps are the bag's).
 """
 
 from dataclasses import dataclass, replace
@@ -21,6 +26,8 @@ from matrix_bringup.graph import BagFacts, GraphSettings, NodeSpec, graph_nodes
 from matrix_core import topics
 
 GROUND = 'ground'
+# fuse reads each drone's images from its link_sender, best effort (STREAMS)
+LINK_IMAGES = {'compressed_topic': '{view}/' + topics.LINK_IMAGE_COMPRESSED, 'qos': 'sensor_data'}
 UP, DOWN = 'drone -> ground', 'ground -> drone'
 
 
@@ -38,9 +45,11 @@ class LinkStream:
 
 # Every per-drone stream a ground process may read: (stream, type, reliability, why).
 STREAMS = {
-    topics.IMAGE_COMPRESSED: (topics.COMPRESSED_TYPE, 'best_effort', (
-        'the largest stream (a JPEG of 1080p, ~0.7 MB): best effort, so a lost fragment loses that frame and '
-        'a slow link drops old frames instead of queueing them; fuse wants the newest frame only')),
+    topics.LINK_IMAGE_COMPRESSED: (topics.COMPRESSED_TYPE, 'best_effort', (
+        "the camera's frames that link_sender lets through (a JPEG of 1080p, ~0.7 MB): a frame leaves once "
+        'the link budget carried the ones before, the others are dropped whole at the sender (a slow link '
+        'drops frames instead of queueing them or losing packets of each); best effort: nothing is resent, '
+        'fuse wants the newest frame only')),
     topics.HOMOGRAPHY: (topics.HOMOGRAPHY_TYPE, 'reliable', (
         'tiny (~0.3 kB) and the geometry of its image: without it the view is missing for that frame')),
     topics.CAMERA_INFO: (topics.CAMERA_INFO_TYPE, 'reliable', 'tiny; the calibration of each frame'),
@@ -78,8 +87,10 @@ class Deployment:
         return '\n'.join(lines)
 
 
-def deployment(s: GraphSettings, bag: BagFacts = None) -> Deployment:
-    """The graph of ``s`` on one host per drone plus the ground station (see the module docstring)."""
+def deployment(s: GraphSettings, bag: BagFacts = None, link_mbit=0.0) -> Deployment:
+    """The graph of ``s`` on one host per drone plus the ground station (see the module docstring).
+    ``link_mbit``: the image budget of each drone's link (``link_sender``; 0: every frame is sent), one
+    for all or a dict by drone (drones not in it: 0)."""
     if s.drones_per_process != 1:
         raise ValueError('a deployment runs one drone per host: drones_per_process must be 1')
     bag = bag or BagFacts.read(s.bag, s.views)
@@ -90,14 +101,18 @@ def deployment(s: GraphSettings, bag: BagFacts = None) -> Deployment:
     player = nodes.pop()
     hosts = {v: [n for n in nodes if n.namespace == v] for v in s.views}
     hosts[GROUND] = [n for n in nodes if n.namespace not in s.views]
-    hosts[GROUND] = [replace(n, parameters={**n.parameters, 'qos': 'sensor_data'}) if n.executable == 'fuse' else n
-                     for n in hosts[GROUND]]   # fuse reads the images best effort over the link (STREAMS)
+    hosts[GROUND] = [replace(n, parameters={**n.parameters, **LINK_IMAGES}) if n.executable == 'fuse' else n
+                     for n in hosts[GROUND]]
     for v in s.views:
         own = [topics.absolute(v, topics.IMAGE_COMPRESSED)]   # as its camera would: this drone's streams only
         if bag.has_ground_truth:
             own.append(topics.absolute(v, topics.GROUND_TRUTH_CAMERA_INFO))
-        hosts[v].append(NodeSpec(player.package, player.executable, player.name, v,
-                                 {**player.parameters, 'topics': own}))
+        # the camera's readers are the drone process and link_sender: as many as the one-host graph's
+        # (drone and fuse), so the player's wait_for_subscribers holds
+        budget = link_mbit.get(v, 0.0) if isinstance(link_mbit, dict) else link_mbit
+        hosts[v] += [NodeSpec('matrix_ros', 'link_sender', 'link_sender', v, {'link_mbit': float(budget)}),
+                     NodeSpec(player.package, player.executable, player.name, v,
+                              {**player.parameters, 'topics': own})]
     return Deployment(hosts, {v: _link_streams(v, hosts[GROUND]) for v in s.views})
 
 
@@ -111,7 +126,8 @@ def ground_reads(node: NodeSpec, view: str) -> list:
     p = node.parameters
     if node.executable == 'fuse':
         geometry = topics.HOMOGRAPHY if p.get('input_kind') == 'homography' else topics.CAMERA_INFO
-        return [topics.IMAGE_COMPRESSED, geometry]
+        image = p.get('compressed_topic', '{view}/' + topics.IMAGE_COMPRESSED).partition('/')[2]
+        return [image, geometry]
     if node.executable == 'recorder':
         recorded = set(p.get('topics', ()))
         return [st for st in STREAMS if topics.absolute(view, st) in recorded or st in recorded]

@@ -141,9 +141,23 @@ class NodeSpec:
 
 
 def _param_text(value) -> str:
-    """A parameter value as ``-p`` parses it (YAML): a launch-argument string, lists in brackets."""
+    """A parameter value as ``-p`` parses it (YAML): a launch-argument string, lists in brackets, a string that
+    YAML would read as something else quoted (``{view}/image``: a mapping to YAML)."""
     text = setting_to_string(value)
-    return f'[{text}]' if isinstance(value, (list, tuple)) else text
+    if isinstance(value, (list, tuple)):
+        return f'[{text}]'
+    if isinstance(value, str) and _yaml_reads(text) != value:
+        return "'" + value.replace("'", "''") + "'"
+    return text
+
+
+def _yaml_reads(text: str):
+    import yaml
+
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError:
+        return None
 
 
 def share_file(package: str, *parts: str) -> str:

@@ -2,9 +2,11 @@
 stdout, each with the wall time it arrived (hosts of the harness share the machine's clock, so the lines of
 probes on two hosts compare). For tests and scripts/bench_distributed.py.
 
-    --fuse:          {"kind": "tracks", "stamp", "t", "ids"} per /tracks and {"kind": "fuse", "stamp",
-                     "t", "views_used", "sync", "missing": {view: reason}} per fuse status on /diagnostics
-    --images D1 D2:  {"kind": "image", "view", "stamp", "t", "bytes"} per /Dn/image/compressed
+    --fuse:          {"kind": "tracks", "stamp", "t", "ids"} per /tracks, {"kind": "fuse", "stamp", "t",
+                     "views_used", "sync", "missing": {view: reason}} per fuse status on /diagnostics and
+                     {"kind": "link", "view", "stamp", "t", "outcome"} per link_sender status there
+    --images D1 D2:  {"kind": "image", "view", "stamp", "t", "bytes"} per /Dn/image/compressed (the camera's)
+    --link D1 D2:    the same per /Dn/link/image/compressed (link_sender's, best effort as fuse reads it)
 """
 
 import argparse
@@ -33,6 +35,10 @@ def _stamp(msg) -> float:
 
 def _on_diagnostics(msg) -> None:
     by_name = {s.name: s for s in msg.status}
+    for name, s in by_name.items():
+        if name.startswith('link_sender/'):
+            values = {kv.key: kv.value for kv in s.values}
+            _emit(kind='link', view=s.hardware_id, stamp=_stamp(msg), outcome=values['outcome'])
     if 'fuse' not in by_name:
         return
     values = {kv.key: kv.value for kv in by_name['fuse'].values}
@@ -45,7 +51,8 @@ def _on_diagnostics(msg) -> None:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument('--fuse', action='store_true', help="fuse's tracks and diagnostics")
-    parser.add_argument('--images', nargs='*', default=[], help='drones whose compressed images to log')
+    parser.add_argument('--images', nargs='*', default=[], help="drones whose camera's images to log")
+    parser.add_argument('--link', nargs='*', default=[], help="drones whose link_sender's images to log")
     args = parser.parse_args(argv)
     rclpy.init()
     node = rclpy.create_node('link_probe')
@@ -54,10 +61,11 @@ def main(argv=None) -> int:
             kind='tracks', stamp=_stamp(m), ids=[t.id for t in m.tracks]), qos_by_name('history', 100))
         node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, _on_diagnostics,
                                  qos_by_name('history', 100))
-    for view in args.images:
-        node.create_subscription(CompressedImage, topics.drone_topic(view, topics.IMAGE_COMPRESSED),
-                                 lambda m, v=view: _emit(kind='image', view=v, stamp=_stamp(m), bytes=len(m.data)),
-                                 qos_by_name('sensor_data'))
+    for views, stream, qos in ((args.images, topics.IMAGE_COMPRESSED, 'sensor_data'),
+                               (args.link, topics.LINK_IMAGE_COMPRESSED, 'sensor_data')):
+        for view in views:
+            node.create_subscription(CompressedImage, topics.drone_topic(view, stream), lambda m, v=view: _emit(
+                kind='image', view=v, stamp=_stamp(m), bytes=len(m.data)), qos_by_name(qos))
     print(json.dumps({'kind': 'ready'}), flush=True)
     try:
         rclpy.spin(node)

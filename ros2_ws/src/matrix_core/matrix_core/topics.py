@@ -15,6 +15,7 @@ DIAGNOSTICS_TOPIC = '/diagnostics'
 # Per-drone streams (relative to the drone).
 IMAGE_RAW = 'image_raw'
 IMAGE_COMPRESSED = 'image/compressed'
+LINK_IMAGE_COMPRESSED = 'link/image/compressed'  # the images a drone sends across its link (link_sender)
 CAMERA_INFO = 'camera_info'                      # calib's per-frame calibration
 POSE = 'pose'                                    # calib's camera pose
 HOMOGRAPHY = 'homography'                        # register's registration
