@@ -49,7 +49,7 @@ def test_what_crosses_each_link_and_its_qos(settings):
     d = deployment(settings(record='/out/rec', monitor=True), FACTS)
     assert list(d.links) == VIEWS
     link = {st.topic: st for st in d.links['D2']}
-    assert set(link) == {'D2/link/image/compressed', 'D2/homography', 'D2/camera_info', 'D2/pose',
+    assert set(link) == {'D2/link/image/compressed', 'D2/link/dropped', 'D2/homography', 'D2/camera_info', 'D2/pose',
                          'D2/ground_truth/camera_info', '/diagnostics'}
     assert all(st.direction == UP for st in link.values())   # the ground sends nothing back but acks
     assert not any(st.direction == DOWN for streams in d.links.values() for st in streams)
@@ -64,6 +64,7 @@ def test_what_crosses_each_link_and_its_qos(settings):
     fuse = next(n for n in d.hosts[GROUND] if n.executable == 'fuse')
     assert fuse.parameters['qos'] == 'sensor_data' and fuse.parameters['image_kind'] == 'compressed'
     assert fuse.parameters['compressed_topic'] == '{view}/link/image/compressed'
+    assert fuse.parameters['dropped_topic'] == '{view}/link/dropped' and link['D2/link/dropped'].readers == ('fuse',)
     assert 'D2/link/image/compressed' in d.describe() and 'best_effort' in d.describe()
     # the image budget of every link: none unless given
     assert d.hosts['D2'][1].parameters == {'link_mbit': 0.0}
@@ -81,7 +82,7 @@ def test_never_raw_images_and_a_minimal_link(settings):
         deployment(settings(drones_per_process=2), FACTS)
     # without recorder and monitor only what fuse needs crosses: the image and its geometry
     d = deployment(settings(), BagFacts(compressed=True, frames=5, has_ground_truth=False))
-    assert [st.topic for st in d.links['D1']] == ['D1/link/image/compressed', 'D1/homography']
+    assert [st.topic for st in d.links['D1']] == ['D1/link/image/compressed', 'D1/link/dropped', 'D1/homography']
     assert d.hosts['D1'][-1].parameters['topics'] == ['/D1/image/compressed']
     d = deployment(settings(input_kind='camera_info'), FACTS)
-    assert [st.topic for st in d.links['D3']] == ['D3/link/image/compressed', 'D3/camera_info']
+    assert [st.topic for st in d.links['D3']] == ['D3/link/image/compressed', 'D3/link/dropped', 'D3/camera_info']

@@ -7,9 +7,10 @@ means nothing for a homography, changes nothing."""
 import numpy as np
 import pytest
 from sensor_msgs.msg import CompressedImage, Image
+from std_msgs.msg import Header
 
 from matrix_core.datasets import MatrixDataset
-from matrix_core.fusion.view_inputs import ViewInputs
+from matrix_core.fusion.view_inputs import NOT_SENT, ImageNotSent, ViewInputs
 from matrix_core.register.registration import Registration
 from matrix_ros.conversions import (camera_to_camera_info, image_to_compressed, image_to_msg,
                                     registration_to_msg)
@@ -45,6 +46,14 @@ def test_good_view_is_usable(real):
     for geometry, kind in ((_homography(camera), 'homography'), (_camera_info(camera), 'camera_info')):
         view = _inputs().view_input('D1', image_to_compressed(image), geometry, kind)
         assert view.usable, view.reason
+
+
+def test_an_image_its_drone_did_not_send_makes_the_view_missing_saying_so(real):
+    # link_sender's notice stands in for the image (the frame does not wait for it); with or without geometry
+    camera, _ = real
+    for geometry in (_homography(camera), None):
+        view = _inputs().view_input('D1', ImageNotSent(Header()), geometry, 'homography')
+        assert not view.usable and view.reason == NOT_SENT and view.reason.startswith('no image')
 
 
 @pytest.mark.parametrize('make, reason', [

@@ -5,6 +5,8 @@ Per view ``V`` in ``views``: the image (``image_topic`` Image and/or ``compresse
 one, or a confidence below ``min_confidence``, makes the view missing) or ``camera_info_topic`` (CameraInfo
 ``p = K [R | t]`` from calib or a bag's ground truth), per ``input_kind``; relative patterns
 (``matrix_core.topics``); images are subscribed once the geometry stream has a publisher (``matrix_ros.connect``).
+With ``dropped_topic``, a drone's notice that it did not send a frame's image (``link_sender``, std_msgs/Header)
+stands in for that image: the frame does not wait for it, and the view is missing 'dropped at the sender'.
 Messages are grouped by stamp (``matrix_core.sync``); a frame is fused when every view arrived or
 ``sync_timeout`` wall seconds after its first message (a stopped drone never stalls the graph), by
 ``matrix_core.fusion`` (``view_inputs``, ``fuser.BevFuser``). Every fused frame publishes (``matrix_ros.
@@ -29,7 +31,7 @@ from visualization_msgs.msg import MarkerArray
 from matrix_bev_tracker.settings import LIVE_PARAMETERS, FuseNodeSettings
 from matrix_core import topics
 from matrix_core.fusion.fuser import BevFuser
-from matrix_core.fusion.view_inputs import ViewInputs
+from matrix_core.fusion.view_inputs import ImageNotSent, ViewInputs
 from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
 from matrix_ros import fusion_messages as out
 from matrix_ros.connect import SubscribeWhenConnected
@@ -77,6 +79,9 @@ class FuseNode(Node):
                 if s.image_kind in (kind, 'both'):
                     self.create_subscription(msg_type, s.topic(image_pattern, view),
                                              lambda m: self._add(view, 'image', m), qos_by_name(s.qos))
+            if s.dropped_topic:   # the drone's word that a frame's image will not come
+                self.create_subscription(Header, s.topic(s.dropped_topic, view),
+                                         lambda m: self._add(view, 'image', ImageNotSent(m)), qos_by_name('reliable'))
         return SubscribeWhenConnected(self, view, [geometry], subscribe_images)
 
     def _start_fresh(self) -> None:

@@ -5,7 +5,7 @@ and :func:`~matrix_bringup.graph.graph_nodes` as the one-host graph; pure Python
     drone host Dn:  bag_player (only Dn's camera: image/compressed, ground_truth/camera_info)
                     register, calib, link_sender (namespace /Dn: bare stream names)
          | link Dn: up   link/image/compressed (link_sender: the frames the link budget carries, best effort),
-         |               homography, camera_info, pose, /diagnostics (reliable)
+         |               link/dropped, homography, camera_info, pose, /diagnostics (reliable)
          |          down nothing but DDS discovery and acknowledgements
     ground host:    fuse, recorder, graph_monitor
 
@@ -15,7 +15,8 @@ Differences from the one-host graph, each for the link: images cross compressed 
 link a frame leaves only once the link budget (``link_mbit``) has carried the ones before, the others are
 dropped whole at the sender, so a slow link neither queues old frames nor loses packets of every frame;
 fuse reads that stream best effort (``qos: sensor_data``: nothing is resent across the link; a frame that
-arrives after its stamp was fused is refused anyway). The players run on the recorded timing (``lockstep``
+arrives after its stamp was fused is refused anyway) and link_sender's notices of the frames it dropped (it
+need not wait for those images). The players run on the recorded timing (``lockstep``
 off: a camera does not wait for the ground) and every host on its own clock (``use_sim_time`` off: no
 ``/clock`` across links; stamps are the bag's).
 """
@@ -26,8 +27,9 @@ from matrix_bringup.graph import BagFacts, GraphSettings, NodeSpec, graph_nodes
 from matrix_core import topics
 
 GROUND = 'ground'
-# fuse reads each drone's images from its link_sender, best effort (STREAMS)
-LINK_IMAGES = {'compressed_topic': '{view}/' + topics.LINK_IMAGE_COMPRESSED, 'qos': 'sensor_data'}
+# fuse reads each drone's images from its link_sender, best effort, and its notices of frames not sent (STREAMS)
+LINK_IMAGES = {'compressed_topic': '{view}/' + topics.LINK_IMAGE_COMPRESSED, 'qos': 'sensor_data',
+               'dropped_topic': '{view}/' + topics.LINK_DROPPED}
 UP, DOWN = 'drone -> ground', 'ground -> drone'
 
 
@@ -50,6 +52,8 @@ STREAMS = {
         'the link budget carried the ones before, the others are dropped whole at the sender (a slow link '
         'drops frames instead of queueing them or losing packets of each); best effort: nothing is resent, '
         'fuse wants the newest frame only')),
+    topics.LINK_DROPPED: (topics.HEADER_TYPE, 'reliable', (
+        'tiny; the stamp of each frame link_sender dropped: fuse fuses that frame without waiting for its image')),
     topics.HOMOGRAPHY: (topics.HOMOGRAPHY_TYPE, 'reliable', (
         'tiny (~0.3 kB) and the geometry of its image: without it the view is missing for that frame')),
     topics.CAMERA_INFO: (topics.CAMERA_INFO_TYPE, 'reliable', 'tiny; the calibration of each frame'),
@@ -127,7 +131,8 @@ def ground_reads(node: NodeSpec, view: str) -> list:
     if node.executable == 'fuse':
         geometry = topics.HOMOGRAPHY if p.get('input_kind') == 'homography' else topics.CAMERA_INFO
         image = p.get('compressed_topic', '{view}/' + topics.IMAGE_COMPRESSED).partition('/')[2]
-        return [image, geometry]
+        dropped = [p['dropped_topic'].partition('/')[2]] if p.get('dropped_topic') else []
+        return [image, *dropped, geometry]
     if node.executable == 'recorder':
         recorded = set(p.get('topics', ()))
         return [st for st in STREAMS if topics.absolute(view, st) in recorded or st in recorded]

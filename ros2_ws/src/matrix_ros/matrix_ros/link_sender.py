@@ -6,9 +6,11 @@ the bare names of that drone): subscribes ``image_topic`` (CompressedImage from 
 calib and register there read every frame themselves) and republishes each frame the gate lets through on
 ``link_topic``, best effort, keep-last 1, volatile: nothing waits to be resent across the link (a lost
 packet loses that frame; the next one comes a frame period later) and a reader that joins late gets no old
-frame. Per frame, a ``link_sender/<view>`` status on ``/diagnostics`` stamped with the frame's stamp: sent,
-or dropped and why, with the counts so far. Used by ``matrix_bringup.deployment`` (one per drone host; fuse
-on the ground reads ``link_topic``).
+frame. The header of each frame dropped goes out on ``dropped_topic`` (std_msgs/Header, reliable: tiny),
+so that the ground need not wait for that image (fuse's ``dropped_topic``). Per frame, a
+``link_sender/<view>`` status on ``/diagnostics`` stamped with the frame's stamp: sent, or dropped and why,
+with the counts so far. Used by ``matrix_bringup.deployment`` (one per drone host; fuse on the ground reads
+``link_topic`` and ``dropped_topic``).
 """
 
 import time
@@ -18,6 +20,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import CompressedImage
+from std_msgs.msg import Header
 
 from matrix_core import topics
 from matrix_core.link_gate import DROPPED, LinkGate
@@ -38,14 +41,17 @@ class LinkSenderSettings:
         'help': "the camera's CompressedImage stream, relative to the drone"})
     link_topic: str = field(default=topics.LINK_IMAGE_COMPRESSED, metadata={
         'help': 'the stream across the link, relative to the drone (what the ground reads)'})
+    dropped_topic: str = field(default=topics.LINK_DROPPED, metadata={
+        'help': 'the headers of the frames not sent (std_msgs/Header), relative to the drone'})
     link_mbit: float = field(default=0.0, metadata={
         'help': "Mbit/s of the drone's link the images may use (leave room for geometry, diagnostics and "
                 'discovery); a frame leaves once the ones before it had time to cross; 0: every frame'})
 
     def __post_init__(self):
         LinkGate(self.link_mbit)   # raises naming the setting
-        if self.image_topic == self.link_topic:
-            raise ValueError(f'image_topic and link_topic must differ, both are {self.image_topic!r}')
+        if len({self.image_topic, self.link_topic, self.dropped_topic}) < 3:
+            raise ValueError('image_topic, link_topic and dropped_topic must differ, got '
+                             f'{self.image_topic!r}, {self.link_topic!r}, {self.dropped_topic!r}')
 
 
 class LinkSender(Node):
@@ -56,17 +62,19 @@ class LinkSender(Node):
         self.gates = {}
         for view, prefix in hosted_drones(self, s.views):
             self.gates[view] = LinkGate(s.link_mbit)
-            pub = self.create_publisher(CompressedImage, topics.drone_topic(prefix, s.link_topic), LINK_QOS)
+            pubs = (self.create_publisher(CompressedImage, topics.drone_topic(prefix, s.link_topic), LINK_QOS),
+                    self.create_publisher(Header, topics.drone_topic(prefix, s.dropped_topic), publisher_qos()))
             self.create_subscription(CompressedImage, topics.drone_topic(prefix, s.image_topic),
-                                     lambda msg, v=view, p=pub: self._frame(v, p, msg), qos_by_name('reliable', 2))
+                                     lambda msg, v=view, p=pubs: self._frame(v, *p, msg), qos_by_name('reliable', 2))
         budget = f'{s.link_mbit:g} Mbit/s' if s.link_mbit else 'no budget: every frame'
         self.get_logger().info(f'sending {", ".join(self.gates)}: {s.image_topic} -> {s.link_topic}, {budget}')
 
-    def _frame(self, view: str, pub, msg: CompressedImage) -> None:
+    def _frame(self, view: str, pub, dropped_pub, msg: CompressedImage) -> None:
         gate, now = self.gates[view], time.monotonic()
         busy_s = gate.busy_s(now)
         outcome = gate.offer(now, len(msg.data))
         if outcome == DROPPED:
+            dropped_pub.publish(msg.header)
             level = diagnostics.WARN
             why = f'dropped at the sender: the link carries the frames before for {busy_s:.2f} s'
         else:

@@ -38,6 +38,9 @@ class FuseSettings(TrackerSettings):
         'help': 'where each frame\'s ground homography comes from: homography (matrix_msgs/HomographyStamped, '
                 'h_img_to_ground, from register) or camera_info (CameraInfo p = K[R|t], from calib or the bag\'s '
                 'ground truth)'})
+    dropped_topic: str = field(default='', metadata={
+        'help': "pattern of a drone's notices of frames it did not send (std_msgs/Header; link_sender's "
+                "'{view}/" + topics.LINK_DROPPED + "'): the frame does not wait for that image; empty: none"})
     homography_topic: str = field(default='{view}/' + topics.HOMOGRAPHY, metadata={
         'help': 'HomographyStamped topic pattern'})
     camera_info_topic: str = field(default='{view}/' + topics.CAMERA_INFO, metadata={'help': 'CameraInfo topic pattern'})
@@ -67,8 +70,8 @@ class FuseSettings(TrackerSettings):
             raise ValueError(f'image_kind must be one of {IMAGE_KINDS}, got {self.image_kind!r}')
         if self.input_kind not in INPUT_KINDS:
             raise ValueError(f'input_kind must be one of {INPUT_KINDS}, got {self.input_kind!r}')
-        for name in ('image_topic', 'compressed_topic', 'homography_topic', 'camera_info_topic'):
-            if '{view}' not in getattr(self, name):
+        for name in ('image_topic', 'compressed_topic', 'homography_topic', 'camera_info_topic', 'dropped_topic'):
+            if '{view}' not in getattr(self, name) and (getattr(self, name) or name != 'dropped_topic'):
                 raise ValueError(f'{name} must contain {{view}}, got {getattr(self, name)!r}')
         if len(self.area) != 4 or self.area[0] >= self.area[2] or self.area[1] >= self.area[3]:
             raise ValueError(f'area must be x_min y_min x_max y_max, got {self.area}')

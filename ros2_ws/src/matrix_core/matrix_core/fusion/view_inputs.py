@@ -10,10 +10,23 @@ only subscribes and hands the messages over. Geometry:
   image of another size than the CameraInfo's makes the view missing.
 """
 
+from dataclasses import dataclass
+
 from matrix_core.fusion.views import ViewInput, ViewInputError, at_reduced_resolution, jpeg_reduction
 from matrix_core.message_fields import (ConversionError, camera_from_camera_info, image_from_msg, is_jpeg,
                                         registration_from_msg)
 from matrix_core.register.registration import STATUS_FAILED, RegistrationError
+
+
+NOT_SENT = 'no image: dropped at the sender (link budget)'
+
+
+@dataclass(frozen=True)
+class ImageNotSent:
+    """Stands in for an image its drone said it did not send (``link_sender`` dropped the frame before its
+    link), so that the frame need not wait for it. ``header``: the notice's (the frame's stamp)."""
+
+    header: object
 
 
 def registration_ground(registration, min_confidence: float):
@@ -45,6 +58,8 @@ class ViewInputs:
     def view_input(self, view: str, image_msg, geometry_msg, geometry_name: str) -> ViewInput:
         """One view's :class:`ViewInput`; any problem becomes its reason. ``geometry_name`` names the missing
         geometry in that reason (e.g. 'homography')."""
+        if isinstance(image_msg, ImageNotSent):
+            return ViewInput(reason=NOT_SENT)
         if image_msg is None or geometry_msg is None:
             return ViewInput(reason='no ' + ' and no '.join(
                 p for p, x in (('image', image_msg), (geometry_name, geometry_msg)) if x is None))
