@@ -5,8 +5,7 @@ Per view ``V`` in ``views``: the image (``image_topic`` Image and/or ``compresse
 one, or a confidence below ``min_confidence``, makes the view missing) or ``camera_info_topic`` (CameraInfo
 ``p = K [R | t]`` from calib or a bag's ground truth), per ``input_kind``; relative patterns
 (``matrix_core.topics``); images are subscribed once the geometry stream has a publisher (``matrix_ros.connect``).
-With ``dropped_topic``, a drone's notice that it did not send a frame's image (``link_sender``, std_msgs/Header)
-stands in for that image: the frame does not wait for it, and the view is missing 'dropped at the sender'.
+``dropped_topic``: a drone's notice (std_msgs/Header) that ``link_sender`` did not send a frame stands in for its image.
 Messages are grouped by stamp (``matrix_core.sync``); a frame is fused when every view arrived or
 ``sync_timeout`` wall seconds after its first message (a stopped drone never stalls the graph), by
 ``matrix_core.fusion`` (``view_inputs``, ``fuser.BevFuser``). Every fused frame publishes (``matrix_ros.
@@ -139,11 +138,8 @@ class FuseNode(Node):
             del self.first_arrival[k]
         result.timing['publish_s'] = time.perf_counter() - t0 - result.timing['decode_s'] - result.timing['total_s']
         latency = self.get_clock().now().nanoseconds * 1e-9 - frame.stamp
-        missing = [v for v, st in result.views.items() if not st.available]
-        if missing:
-            self.get_logger().warning(f't={frame.stamp:.3f} s: fused {len(s.views) - len(missing)}/{len(s.views)} '
-                                      f'views ({frame.reason}); missing: ' + '; '.join(
-                                          f'{v}: {result.views[v].reason}' for v in missing))
+        if missing := out.missing_views_text(frame, result):
+            self.get_logger().warning(missing)
         if result.resets:
             self.get_logger().info(f't={frame.stamp:.3f} s: reset {" and ".join(result.resets)} state')
         self.pubs['diagnostics'].publish(out.fuse_diagnostics(header, frame, result, time.monotonic() - first, latency,

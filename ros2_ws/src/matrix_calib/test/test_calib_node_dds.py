@@ -13,6 +13,7 @@ from sensor_msgs.msg import CameraInfo, CompressedImage
 from matrix_core.datasets import MatrixDataset
 from matrix_core.geometry.camera import rotation_angle_deg
 from matrix_ros.conversions import camera_info_to_camera, pose_to_world_T_cam, stamp_to_seconds
+from matrix_ros.qos import qos_by_name
 from ros_helpers import spin_until, start_node, stop, stop_all, wait_matched
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -88,7 +89,8 @@ def test_calib_node_survives_bad_input(matrix_sample, node_executable):
     node = Node('calib_bad_input_test')
     pub = node.create_publisher(CompressedImage, '/D5/image/compressed', 10)
     diags = []
-    diag_sub = node.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 10)
+    # history: the calib's first status may go out before its writer matched this reader
+    diag_sub = node.create_subscription(DiagnosticArray, '/diagnostics', diags.append, qos_by_name('history'))
     calib = start_node(node_executable('matrix_calib', 'calib'), 'views:=[D5]', 'compressed:=true',
                        f'prior_dataset:={matrix_sample}', 'qos:=reliable')
     good = (matrix_sample / 'image_subsets/D5/0000.jpg').read_bytes()

@@ -96,6 +96,14 @@ def heatmap_msg(header, grid, heatmap) -> OccupancyGrid:
     return msg
 
 
+def missing_views_text(frame, result) -> str:
+    """The log line of a frame fused without some views, naming each and why ('' when none is missing)."""
+    missing = [v for v, st in result.views.items() if not st.available]
+    return (f't={frame.stamp:.3f} s: fused {len(result.views) - len(missing)}/{len(result.views)} views '
+            f'({frame.reason}); missing: ' + '; '.join(f'{v}: {result.views[v].reason}' for v in missing)
+            if missing else '')
+
+
 def fuse_diagnostics(header, frame, result, wait_s: float, latency_s: float, late_messages: int,
                      frames_published: int):
     """``fuse/<view>`` (used or missing and why, registration confidence) and a ``fuse`` summary (sync
