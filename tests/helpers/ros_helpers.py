@@ -53,13 +53,14 @@ def start_ros2(*args: str) -> subprocess.Popen:
                             start_new_session=True)
 
 
-def finish(process: subprocess.Popen, timeout_s: float = 20.0) -> str:
-    """Output of ``process`` once it exited; killed (no orphans) if it has not exited within ``timeout_s``."""
+def finish(process: subprocess.Popen, timeout_s: float = 20.0, why: str = 'did not exit') -> str:
+    """Output of ``process`` once it exited; killed (no orphans) if it has not exited within ``timeout_s``,
+    the output then ending in ``[killed: WHY]``."""
     try:
         return process.communicate(timeout=timeout_s)[0] or ''   # '' when not piped
     except subprocess.TimeoutExpired:
         _kill(process)
-        return (process.communicate()[0] or '') + '\n[killed: did not exit]'
+        return (process.communicate()[0] or '') + f'\n[killed: {why}]'
 
 
 def _kill(process: subprocess.Popen) -> None:
@@ -87,11 +88,7 @@ def interrupt(process: subprocess.Popen, timeout_s: float = 30.0) -> str:
     ``timeout_s``. Returns the output."""
     if process.poll() is None:
         os.killpg(process.pid, signal.SIGINT)
-    try:
-        return process.communicate(timeout=timeout_s)[0]
-    except subprocess.TimeoutExpired:
-        _kill(process)
-        return process.communicate()[0] + '\n[killed: did not exit on SIGINT]'
+    return finish(process, timeout_s, 'did not exit on SIGINT')
 
 
 def interrupt_all(processes: Iterable[subprocess.Popen], timeout_s: float = 30.0) -> list:
@@ -101,7 +98,9 @@ def interrupt_all(processes: Iterable[subprocess.Popen], timeout_s: float = 30.0
     for p in processes:
         if p.poll() is None:
             os.killpg(p.pid, signal.SIGINT)
-    return [interrupt(p, timeout_s) for p in processes]
+    # one SIGINT each: a second one while `ros2 launch` shuts down makes it abort with a KeyboardInterrupt
+    # traceback (seen when a node took long to exit on a loaded machine)
+    return [finish(p, timeout_s, 'did not exit on SIGINT') for p in processes]
 
 
 def stop_all(processes: Iterable[subprocess.Popen], timeout_s: float = 20.0) -> list:
