@@ -24,6 +24,8 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import yaml
+
 from matrix_core.bags.salvage import topic_counts
 from matrix_core.datasets.matrix_conventions import MATRIX_VIEWS
 from matrix_core.settings import setting_to_string
@@ -152,8 +154,6 @@ def _param_text(value) -> str:
 
 
 def _yaml_reads(text: str):
-    import yaml
-
     try:
         return yaml.safe_load(text)
     except yaml.YAMLError:

@@ -33,15 +33,18 @@ def _stamp(msg) -> float:
     return round(stamp_to_seconds(msg.header.stamp), 6)
 
 
+def _values(status) -> dict:
+    return {kv.key: kv.value for kv in status.values}
+
+
 def _on_diagnostics(msg) -> None:
     by_name = {s.name: s for s in msg.status}
     for name, s in by_name.items():
         if name.startswith('link_sender/'):
-            values = {kv.key: kv.value for kv in s.values}
-            _emit(kind='link', view=s.hardware_id, stamp=_stamp(msg), outcome=values['outcome'])
+            _emit(kind='link', view=s.hardware_id, stamp=_stamp(msg), outcome=_values(s)['outcome'])
     if 'fuse' not in by_name:
         return
-    values = {kv.key: kv.value for kv in by_name['fuse'].values}
+    values = _values(by_name['fuse'])
     missing = {s.hardware_id: s.message for name, s in by_name.items()
                if name.startswith('fuse/') and s.message != 'used'}
     _emit(kind='fuse', stamp=_stamp(msg), views_used=int(values['views_used']), sync=values['sync'],

@@ -4,7 +4,7 @@ time to carry the ones before it (``matrix_core.link_gate``), the others dropped
 Per drone (``views``, relative names as ``matrix_core.topics``; in a drone's namespace, as on a drone host,
 the bare names of that drone): subscribes ``image_topic`` (CompressedImage from the camera, on the drone:
 calib and register there read every frame themselves) and republishes each frame the gate lets through on
-``link_topic``, best effort, keep-last 1, volatile: nothing waits to be resent across the link (a lost
+``link_topic``, best effort and volatile (``sensor_data``): nothing waits to be resent across the link (a lost
 packet loses that frame; the next one comes a frame period later) and a reader that joins late gets no old
 frame. The header of each frame dropped goes out on ``dropped_topic`` (std_msgs/Header, reliable: tiny),
 so that the ground need not wait for that image (fuse's ``dropped_topic``). Per frame, a
@@ -18,7 +18,6 @@ from dataclasses import dataclass, field
 
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import CompressedImage
 from std_msgs.msg import Header
 
@@ -28,9 +27,6 @@ from matrix_ros import diagnostics
 from matrix_ros.node_settings import hosted_drones
 from matrix_ros.params import declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
-
-LINK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT, history=HistoryPolicy.KEEP_LAST,
-                      durability=DurabilityPolicy.VOLATILE)
 
 
 @dataclass
@@ -62,7 +58,8 @@ class LinkSender(Node):
         self.gates = {}
         for view, prefix in hosted_drones(self, s.views):
             self.gates[view] = LinkGate(s.link_mbit)
-            pubs = (self.create_publisher(CompressedImage, topics.drone_topic(prefix, s.link_topic), LINK_QOS),
+            pubs = (self.create_publisher(CompressedImage, topics.drone_topic(prefix, s.link_topic),
+                                          publisher_qos('sensor_data')),
                     self.create_publisher(Header, topics.drone_topic(prefix, s.dropped_topic), publisher_qos()))
             self.create_subscription(CompressedImage, topics.drone_topic(prefix, s.image_topic),
                                      lambda msg, v=view, p=pubs: self._frame(v, *p, msg), qos_by_name('reliable', 2))
