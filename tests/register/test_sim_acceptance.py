@@ -6,8 +6,8 @@ CI-sized: each sequence is rendered once per session at 640x360 (``--fast``; the
 variant) are registered over all 50 frames. Errors are in FULL-RESOLUTION-EQUIVALENT pixels (640x360 pixels
 x 3). Criteria: every pair registered, median <= 0.5 px, worst <= 3 px.
 
-The full-size acceptance (1920x1080, all 8 drones x 50 frames of each variant):
-``python scripts/bench_register.py --simulated``.
+The registration that tracks is checked at 1920x1080 (its test says why). The full-size acceptance (1920x1080,
+all 8 drones x 50 frames of each variant): ``python scripts/bench_register.py --simulated [--mode track]``.
 """
 
 import cv2
@@ -59,10 +59,17 @@ def test_simulated_sequence_meets_the_acceptance(variant, sequences):
 
 @pytest.mark.slow
 @pytest.mark.parametrize('variant', ['complex'])
-def test_registration_that_tracks_meets_the_acceptance(variant, sequences):
-    """Mode track on the same sequence: frames between anchors by optical flow, same criteria on every frame."""
+def test_registration_that_tracks_meets_the_acceptance(variant, tmp_path):
+    """Mode track: frames between anchors by optical flow, the same criteria on every frame, at 1920x1080.
+
+    Unlike the full registration, the flow does not have the same accuracy at 640x360: there, a 480x270 image
+    has less detail than one reduced from 1920x1080 (complex seed 3, all 8 drones: median 0.58 px at 640x360,
+    0.34 px at 1920x1080). So this test renders the sequence at full size (about 1.5 minutes)."""
     cv2.setNumThreads(1)
-    run = acceptance_run(sequences(variant), RegisterSettings(mode='track'), views=VIEWS[variant])
+    out = tmp_path / variant
+    simulate(SimulateSettings(config=variant, frames=FRAMES, seed=SEED, out=str(out), image_ext='.jpg'),
+             progress=False)
+    run = acceptance_run(MatrixDataset(out), RegisterSettings(mode='track'), views=VIEWS[variant])
     figures = (f"{variant} track: {run['pairs'] - len(run['failed'])}/{run['pairs']} registered, "
                f"{run['tracked']} by flow, error median {run['error_px_median']:.2f} / max "
                f"{run['error_px_max']:.2f} full-res-equivalent px")

@@ -46,7 +46,10 @@ def test_crowd_walks_like_matrix_pedestrians():
     assert track[..., 0].min() >= ax0 and track[..., 0].max() <= ax1
     assert track[..., 1].min() >= ay0 and track[..., 1].max() <= ay1
     gaps = np.linalg.norm(track[:, :, None] - track[:, None], axis=3) + np.eye(track.shape[1]) * 99
-    assert np.percentile(gaps.min(axis=2), 1) > 0.4  # people avoid each other
+    nearest = np.percentile(gaps.min(axis=2), [1, 5])
+    print(f'nearest neighbour p1 {nearest[0]:.2f} m, p5 {nearest[1]:.2f} m')
+    # people keep the real crowd's distance (real sample: 1.00 / 1.09 m, scripts/crowd_stats.py) and never merge
+    assert nearest[0] > 0.9 and 0.95 < nearest[1] < 1.25
 
 
 def test_reference_poses_match_real_reference_calibrations(matrix_sample):
