@@ -78,6 +78,17 @@ def test_readers_step_on_the_real_multiviewx_sample(tmp_path, shared_dir, monkey
         EXECUTORS['readers']({'dataset': 'shared:multiviewx_sample'}, tmp_path / 'out2', tmp_path, False, print)
 
 
+def test_live_graph_step_needs_the_real_sample(tmp_path, monkeypatch):
+    from matrix_core.experiments import real_live
+    from matrix_core.experiments.steps import EXECUTORS, StepUnavailable
+
+    monkeypatch.setenv('MATRIX_SHARED', str(tmp_path / 'missing'))
+    with pytest.raises(StepUnavailable, match='MATRIX_SHARED'):
+        EXECUTORS['live_graph'](real_live.step_params('detector_seed1.pt'), tmp_path / 'out', tmp_path, False, print)
+    assert real_live.step_params('detector_seed0.pt')['checkpoint_sha256'] != \
+        real_live.step_params('detector_seed1.pt')['checkpoint_sha256']      # another model is another cache key
+
+
 def test_two_jobs_run_ready_steps_and_skip_those_after_a_missing_one(tmp_path, shared_dir, monkeypatch):
     from matrix_core.experiments.plan import Step
     from matrix_core.experiments.runner import run_plan

@@ -1,10 +1,13 @@
 """Camera-dropout subsets (seeded, exact rates) and the experiment plan built from them."""
 
+import hashlib
+
 import pytest
 
 from matrix_core.experiments.dropout import dropout_subsets, dropped_count
 from matrix_core.experiments.plan import VIEWS, build_plan, transfer_name
 from matrix_core.experiments.sizes import QUICK, SIZES
+from matrix_core.fusion.settings import DEFAULT_CHECKPOINT, shipped_checkpoint
 
 
 @pytest.mark.parametrize('rate, dropped', [(0.0, 0), (0.25, 2), (0.5, 4), (0.75, 6)])
@@ -81,6 +84,10 @@ def test_plan_has_every_experiment_once_and_in_order(name):
     for variant in ('simple', 'complex'):
         assert registers[f'geometry/{variant}_test_registration']['estimator'] == 'magsac'
     assert any(s.kind == 'readers' and s.name == 'tables/multiviewx_sample' for s in plan)
+    # 6: the shipped default detector through the live graph on the real sample, keyed by the checkpoint's bytes.
+    [live] = [s for s in plan if s.kind == 'live_graph']
+    assert live.name == 'tables/matrix_sample_live' and live.params['checkpoint'] == DEFAULT_CHECKPOINT
+    assert live.params['checkpoint_sha256'] == hashlib.sha256(shipped_checkpoint().read_bytes()).hexdigest()
 
 
 def test_quick_transfer_uses_half_the_frames():

@@ -27,7 +27,7 @@ def record(model, test, moda, mota=0.5, calibration='ground_truth', dropped=(), 
             'views_used': views, 'trained': {'frames': [0, frames - 1]}, 'detection': det, 'tracking': trk}
 
 
-def write_run(run_dir, size, records, steps, done=None, table=None):
+def write_run(run_dir, size, records, steps, done=None, table=None, real=None):
     for i, r in enumerate(records):
         path = run_dir / 'eval' / f'{i:03d}_{r["model"]}' / 'metrics.json'
         path.parent.mkdir(parents=True)
@@ -39,6 +39,9 @@ def write_run(run_dir, size, records, steps, done=None, table=None):
     if table is not None:
         (run_dir / 'tables' / 'multiviewx_sample').mkdir(parents=True)
         (run_dir / 'tables' / 'multiviewx_sample' / 'metrics.json').write_text(json.dumps(table))
+    if real is not None:
+        (run_dir / 'tables' / 'matrix_sample_live').mkdir(parents=True)
+        (run_dir / 'tables' / 'matrix_sample_live' / 'metrics.json').write_text(json.dumps(real))
     machine = {'cpu': 'Test CPU 9000', 'cpu_count': 2, 'threads': 1, 'torch': '9.9', 'python': '3.11',
                'platform': 'linux', 'git_commit': 'abc123', 'jobs': 2}
     (run_dir / 'run.json').write_text(json.dumps({
@@ -91,7 +94,9 @@ def test_report_tables_hold_the_given_numbers_and_the_papers(tmp_path, size):
     steps = {'eval/x': {'state': 'done', 'wall_s': 1.0},
              'eval/simple_s0__simple__pnp': {'state': 'unavailable', 'reason': 'no source XYZ here'}}
     records = [r for r in variant_rows(size) if not (r['model'] == 'simple_s0' and r['calibration'] == 'pnp')]
-    write_run(tmp_path / 'run', size, records, steps, table=TABLE)
+    real = {**record('detector_seed1.pt', 'real', 0.99, mota=0.925), 'checkpoint': 'detector_seed1.pt',
+            'checkpoint_sha256': 'ab' * 32, 'dataset': 'shared:matrix_sample'}
+    write_run(tmp_path / 'run', size, records, steps, table=TABLE, real=real)
     path = write_report(tmp_path / 'run', tmp_path / 'docs' / 'RESULTS.md', repo=tmp_path)
     text = path.read_text()
     assert ('SMOKE-TEST NUMBERS' in text) == size.smoke_test
@@ -147,6 +152,11 @@ def test_report_tables_hold_the_given_numbers_and_the_papers(tmp_path, size):
     assert row(table3, '| TrackTacular |') == '| TrackTacular | 91.8 | 79.8 | 89.6 | 81.7 | 95.9 | 89.2 | 91.4 | 86.7 |'
     assert row(table3, '| MVTT |') == '| MVTT | 94.1 | 81.3 | - | - | 95.0 | 92.8 | - | - |'
     assert row(table3, '| C1 |') == '| C1 | 200 | 3.1 | 9.9 | 2.50 | 10.1 |'
+    # 6: the default model through the live graph on the real sample, labelled as its validation set.
+    real_data = section(text, '## 6. Real data')
+    assert row(real_data, '| `detector_seed1.pt` (sha256 abababababab) |') == \
+        '| `detector_seed1.pt` (sha256 abababababab) | 10 | 99.0 | 75.0 | 90.0 | 85.0 | 92.5 | 80.0 | 60.0 | 70.0 | 10.0 |'
+    assert 'real validation set' in real_data and 'no test accuracy' in real_data and 'run_graph' in real_data
     # settings and machine.
     assert 'Test CPU 9000' in text and 'abc123' in text and f'{size.image_width}x{size.image_height}' in text
     images = tmp_path / 'docs' / 'images' / 'results'
@@ -207,4 +217,4 @@ def test_report_lists_evaluations_with_failed_frames(tmp_path):
     text = write_report(tmp_path / 'run', tmp_path / 'docs' / 'RESULTS.md', repo=tmp_path).read_text()
     assert '## Evaluations with failed frames or masked views' in text
     assert 'complex_s0 on complex (ground_truth, views' in text and '2 of 10 frames failed, 3 views masked' in text
-    assert 'complex_s0 on complex (ground_truth, views' in text and '2 of 10 frames failed, 3 views masked' in text
+    assert 'Did not run' in section(text, '## 6. Real data')       # no live-graph step in this run

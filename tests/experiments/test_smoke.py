@@ -36,6 +36,11 @@ def test_quick_mode_end_to_end(tmp_path):
     oracle = [line for line in text.split('### Complex variant')[1].splitlines()
               if line.startswith('| oracle geometry (simulator calibration) |')][0]
     assert f'| {moda:.1f} |' in oracle
+    # 6: the shipped default model through the live graph on the real sample (its validation frames 0-4).
+    assert states['tables/matrix_sample_live'] == 'done'
+    live = json.loads((out / 'tiny' / 'tables' / 'matrix_sample_live' / 'metrics.json').read_text())
+    assert live['detection']['moda'] >= 0.90 and not (out / 'tiny' / 'tables' / 'matrix_sample_live' / 'bag').exists()
+    assert f'| {100 * live["detection"]["moda"]:.1f} |' in text.split('## 6. Real data')[1].split('\n## ')[0]
     images = report.parent / 'images' / 'results'
     for name in ('exp1_simple.png', 'exp1_complex.png', 'exp2_transfer.png', 'exp3_dropout.png',
                  'exp1_trajectories_complex_ground_truth.png'):

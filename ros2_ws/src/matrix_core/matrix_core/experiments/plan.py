@@ -17,12 +17,16 @@ Experiments (simulated MATRIX variants; models are named ``<trained on>_<what>``
        plain-RANSAC registration run per RANSAC seed; and ``complex_s<seed>`` per training seed
        (registration homographies) as a second table.
     5. Table III: the dataset readers on the real MultiviewX sample (``../shared/multiviewx_sample``).
+    6. Real data: the shipped default detector through the live graph on the real MATRIX sample (frames 0-4,
+       its real validation set; :mod:`matrix_core.experiments.real_live`).
 """
 
 from dataclasses import dataclass, field
 
+from matrix_core.experiments import real_live
 from matrix_core.experiments.dropout import dropout_subsets
 from matrix_core.experiments.sizes import ExperimentSize
+from matrix_core.fusion.settings import DEFAULT_CHECKPOINT
 
 VARIANTS = ('simple', 'complex', 'modified')
 # Simulator seeds of the training and held-out test sequences (never equal).
@@ -126,6 +130,7 @@ def build_plan(size: ExperimentSize) -> list:
         steps += [geometry_step(variant, kind, size) for kind in GEOMETRY_STEPS.values()]
     steps += [geometry_step('complex', 'register', size, ransac_seed=k) for k in size.ransac_seeds]
     steps.append(Step(MULTIVIEWX_STEP, 'readers', {'dataset': 'shared:multiviewx_sample'}))
+    steps.append(Step(real_live.STEP, 'live_graph', real_live.step_params(DEFAULT_CHECKPOINT)))
     first = size.seeds[0]
     main = f'complex_s{first}'
     steps.append(train_step('simple_s0', 'simple', size, seed=first))

@@ -12,7 +12,10 @@ from pathlib import Path
 CORE = 'ros2_ws/src/matrix_core/matrix_core/'
 # Step kind -> code it depends on (paths relative to the repository root).
 CODE_PATHS = {'simulate': (CORE + 'sim',), 'calibrate': (CORE + 'calib',), 'register': (CORE + 'register',),
-              'train': (CORE + 'bev',), 'evaluate': (CORE + 'bev',), 'readers': (CORE + 'datasets',)}
+              'train': (CORE + 'bev',), 'evaluate': (CORE + 'bev',), 'readers': (CORE + 'datasets',),
+              'live_graph': (CORE + 'calib', CORE + 'register', CORE + 'bev', CORE + 'fusion', CORE + 'tracking',
+                             *(f'ros2_ws/src/{pkg}' for pkg in ('matrix_calib', 'matrix_register', 'matrix_bev_tracker',
+                                                                 'matrix_ros', 'matrix_bringup')))}
 
 
 def _git(repo: Path, *args) -> subprocess.CompletedProcess:

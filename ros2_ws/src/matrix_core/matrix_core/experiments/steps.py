@@ -154,5 +154,7 @@ def run_readers(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
     (out / 'metrics.json').write_text(json.dumps({**p, 'path': str(root), **foot_point_agreement(root)}, indent=2))
 
 
+from matrix_core.experiments.real_live import run_live_real  # noqa: E402  (it imports StepUnavailable from here)
+
 EXECUTORS = {'simulate': run_simulate, 'calibrate': run_calibrate, 'register': run_register, 'train': run_train,
-             'evaluate': run_evaluate, 'readers': run_readers}
+             'evaluate': run_evaluate, 'readers': run_readers, 'live_graph': run_live_real}
