@@ -182,8 +182,15 @@ def test_report_flags_steps_older_than_the_code_they_depend_on(tmp_path):
     (core / 'bev' / 'a.py').write_text('x = 2\n')
     for args in (('add', '-A'), ('-c', 'user.name=t', '-c', 'user.email=t@t', 'commit', '-qm', 'two')):
         _git(repo, *args)
+    second = _git(repo, 'rev-parse', 'HEAD')
+    for sub in ('checkpoints', 'configs'):   # a new shipped model and its config: no code the experiments run
+        (core / 'bev' / sub).mkdir()
+        (core / 'bev' / sub / 'detector.pt').write_text('weights\n')
+    for args in (('add', '-A'), ('-c', 'user.name=t', '-c', 'user.email=t@t', 'commit', '-qm', 'three')):
+        _git(repo, *args)
     done = {'data/simple_train': {'kind': 'simulate', 'commit': first, 'dirty': False},
             'train/simple_s0': {'kind': 'train', 'commit': first, 'dirty': False},
+            'train/complex_s0': {'kind': 'train', 'commit': second, 'dirty': False},
             'geometry/complex_test_registration': {'kind': 'register', 'commit': first, 'dirty': False},
             'eval/old': {'kind': 'evaluate'},
             'data/edited': {'kind': 'simulate', 'commit': first, 'dirty': True,
@@ -193,12 +200,13 @@ def test_report_flags_steps_older_than_the_code_they_depend_on(tmp_path):
     text = write_report(tmp_path / 'run', tmp_path / 'RESULTS.md', repo=repo).read_text()
     prov = section(text, '## Code and provenance')
     assert f'`{_git(repo, "rev-parse", "HEAD")[:12]}`' in prov and f'`{first[:12]}`' in prov
-    assert '**3 of 6 steps were made by an older commit than HEAD (or with local changes)' in prov
+    assert '**3 of 7 steps were made by an older commit than HEAD (or with local changes)' in prov
     assert '`data/edited`: made at' in prov and 'uncommitted local changes to sim' in prov
     assert 'readme_edited' not in prov                        # local changes elsewhere do not matter
     assert '`train/simple_s0`: made at' in prov and 'bev changed since' in prov
     assert '`eval/old`: made by an unknown commit' in prov
     assert 'data/simple_train' not in prov and 'complex_test_registration' not in prov   # their code is unchanged
+    assert 'train/complex_s0' not in prov            # only checkpoints and configs changed in bev/ since
 
 
 def test_report_needs_a_run(tmp_path):
