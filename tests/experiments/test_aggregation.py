@@ -41,6 +41,12 @@ def test_transfer_discussion_follows_the_numbers():
     never = transfer_discussion({0.05: (40.0, 39.0), 0.5: (60.0, 55.0)}, 0.5, 54, 69)
     assert 'does not appear at any measured share' in never and 'worse at 50 %' in never
     assert 'No share was measured' in transfer_discussion({0.5: (math.nan, 50.0)}, 0.5, 54, 69)
+    # The complex model as it is, against the fine-tuned ones: said only when it beats all of them.
+    as_is = transfer_discussion({0.05: (40.0, 80.0), 0.5: (60.0, 55.0)}, 0.5, 54, 69, without_fine_tuning=85.5)
+    assert 'without any fine-tuning (MODA 85.5) beats every fine-tuned one (best 80.0)' in as_is
+    assert 'without any fine-tuning' not in transfer_discussion({0.05: (40.0, 80.0)}, 0.5, 54, 69,
+                                                                without_fine_tuning=81.0)
+    assert 'without any fine-tuning' not in transfer_discussion({0.05: (40.0, 80.0)}, 0.5, 54, 69)
 
 
 def test_archive_keeps_the_small_per_step_files(tmp_path):

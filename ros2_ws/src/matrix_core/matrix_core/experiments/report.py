@@ -218,6 +218,7 @@ class Report:
                 pair.append(value(r, 'MODA'))
             measured[share] = tuple(pair)
         r = one(self.records, model=self.main, test='modified', calibration='ground_truth')
+        without_fine_tuning = value(r, 'MODA')
         rows.append(['0 %', 0, f'`{self.main}` without fine-tuning'] + [pct(value(r, k)) for k in SHORT] + [''])
         labels = list(curves)
         chart = share_curves(self.images / 'exp2_transfer.png', curves,
@@ -233,7 +234,7 @@ class Report:
                  table(['share', 'modified training frames', 'initial weights'] + list(SHORT) + ['paper'], rows),
                  self.image(chart.name, 'transfer sweep'),
                  transfer_discussion(measured, paper.TRANSFER_SHARE, paper.TRANSFER['scratch']['MODA'].value,
-                                     paper.TRANSFER['pretrained']['MODA'].value))
+                                     paper.TRANSFER['pretrained']['MODA'].value, without_fine_tuning))
 
     def dropout(self) -> None:
         curves, rows = {}, []

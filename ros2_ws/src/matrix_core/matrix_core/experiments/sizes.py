@@ -106,11 +106,12 @@ MEDIUM = replace(QUICK, name='medium', smoke_test=False, train_frames=240, test_
 # 2-core machine with two trainings at once, i.e. about 0.5 s per frame and epoch) on shorter sequences, so
 # that the whole plan fits one working session with two steps at once: 8 + 1.8 (transfer sweep) trainings
 # of 300 frames x 10 epochs = about 195 thread-minutes, plus simulation, 14 registration runs, 2 PnP runs
-# and about 60 evaluations: about 140 min wall (an estimate from those rates, not yet measured end to end).
+# and about 60 evaluations. Measured end to end on an idle machine (stop 31, commit d4e417f): 109.5 min wall,
+# 218.5 min summed over the 89 steps (complex trainings about 28 min each, simple 15, evaluations 2-8 s).
 STANDARD = ExperimentSize(
     name='standard', smoke_test=False, train_frames=300, test_frames=60, image_width=320, image_height=176,
     cell_m=0.25, model='bev_small', epochs=10, lr=2e-3, batch_size=1, augment=True, seeds=(0, 1, 2),
-    dropout_seeds=(0, 1, 2), jobs=2, expected_minutes=140,
+    dropout_seeds=(0, 1, 2), jobs=2, expected_minutes=110,
     notes="the default detector's recipe (320x176 input, 0.25 m cells, augmentation) on 300-frame sequences, "
           '10 epochs, two steps at once',
     warning='STANDARD-SIZE RUN: the default detector\'s input and cell size, but 300 training frames per variant '
