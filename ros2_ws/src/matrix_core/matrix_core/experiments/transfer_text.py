@@ -54,6 +54,6 @@ def transfer_discussion(measured: dict, paper_share: float, paper_scratch: float
         text += (f' The complex model without any fine-tuning (MODA {without_fine_tuning:.1f}) beats every fine-tuned '
                  f'one (best {max(pretrained):.1f}): the recipe fine-tunes with the full training rate and epochs, '
                  'which on a few dozen to 150 frames of one sequence overfits them rather than adapting to the '
-                 'variant, the more so the more steps it takes; a lower fine-tuning rate or fewer epochs is what '
+                 'variant; a lower fine-tuning rate or fewer epochs is what '
                  'this table asks for before concluding on pretraining.')
     return text
