@@ -16,6 +16,7 @@ matrix_core.register.flow_tracking) says how many frames were tracked.
     python scripts/bench_drone.py --no-registration-prior            # calib measures the image motion itself
     python scripts/bench_drone.py --track_corners true               # any CalibSettings flag
     python scripts/bench_drone.py --mode track --reanchor_every 10   # registration that tracks
+    python scripts/bench_drone.py --mode track --anchor_by_flow false  # its anchors by features only
 """
 
 import argparse
@@ -38,7 +39,7 @@ from matrix_core.geometry.camera import rotation_angle_deg
 from matrix_core.register.registrar import Registrar
 from matrix_core.register.scene import settings_for_dataset
 from matrix_core.register.settings import RegisterSettings
-from matrix_core.settings import add_settings_arguments, settings_from_namespace
+from matrix_core.settings import add_settings_arguments, parse_bool, settings_from_namespace
 
 PERIOD_S = 0.5  # the MATRIX frame period (2 Hz)
 
@@ -55,7 +56,7 @@ def bench(root: Path, calib_settings: CalibSettings, registration_prior: bool,
     scene = load_scene(str(config_for_dataset(root)))
     register_settings, _ = settings_for_dataset(register_settings, dataset)
     calib_ms, register_ms, ok, tracked, registered, rot, centre = [], [], 0, 0, 0, [], []
-    flow_frames = 0
+    flow_frames = flow_anchors = 0
     with tqdm(total=len(dataset.views) * len(dataset.frames), desc=root.name, unit='image', leave=False) as bar:
         for view in dataset.views:
             reference = dataset.reference_image(view)
@@ -68,6 +69,7 @@ def bench(root: Path, calib_settings: CalibSettings, registration_prior: bool,
                 r = registrar.register(image, frame)
                 register_ms.append(1000 * (time.process_time() - t))
                 flow_frames += r.message.startswith('tracked')
+                flow_anchors += r.message.startswith('anchor by flow')
                 guide = r if registration_prior else None
                 t = time.process_time()
                 c = calibrator.process(image, PERIOD_S * index, guide)
@@ -86,7 +88,7 @@ def bench(root: Path, calib_settings: CalibSettings, registration_prior: bool,
           f'calibration: rotation median {np.median(rot or [np.nan]):.3f} / max {max(rot, default=np.nan):.3f} deg, centre median '
           f'{100 * np.median(centre or [np.nan]):.1f} / max {100 * max(centre, default=np.nan):.1f} cm)\n'
           f'  register  {_figures(register_ms)} (mode {register_settings.mode}: registered {registered} of '
-          f'{len(both)}, of them by flow {flow_frames})\n'
+          f'{len(both)}, of them by flow {flow_frames}, anchors by flow {flow_anchors})\n'
           f'  both      {_figures(both)}: {"keeps" if keeps_up else "does NOT keep"} up with 2 Hz on one core '
           f'(mean <= {1000 * PERIOD_S:.0f} ms); frames over 500 ms: {int((both > 1000 * PERIOD_S).sum())}',
           flush=True)
@@ -110,10 +112,13 @@ def main() -> int:
                         help='registration mode (RegisterSettings.mode)')
     parser.add_argument('--reanchor_every', type=int, default=defaults.reanchor_every,
                         help='mode track: full registration every this many frames (RegisterSettings.reanchor_every)')
+    parser.add_argument('--anchor_by_flow', type=parse_bool, default=defaults.anchor_by_flow,
+                        help='mode track: anchors tried by flow to the reference first (RegisterSettings.anchor_by_flow)')
     add_settings_arguments(parser, CalibSettings)   # e.g. --track_corners true; the config follows each folder
     args = parser.parse_args()
     calib_settings = settings_from_namespace(CalibSettings, args)
-    register_settings = RegisterSettings(mode=args.mode, reanchor_every=args.reanchor_every)
+    register_settings = RegisterSettings(mode=args.mode, reanchor_every=args.reanchor_every,
+                                         anchor_by_flow=args.anchor_by_flow)
     cv2.setNumThreads(1)
     import torch
     torch.set_num_threads(1)

@@ -39,6 +39,7 @@ from matrix_core.register.evaluate import homography_error_px
 from matrix_core.register.registrar import Registrar
 from matrix_core.register.settings import RegisterSettings
 from matrix_core.register.weights import MissingWeightsError
+from matrix_core.settings import parse_bool
 
 
 def feature_budget(backend: str, scale: float, kornia_features: int) -> tuple:
@@ -52,10 +53,12 @@ def feature_budget(backend: str, scale: float, kornia_features: int) -> tuple:
     return 16000, 32000
 
 
-def bench(dataset, backend, scale, pairs, kornia_features, mode='reference', reanchor_every=10) -> dict:
+def bench(dataset, backend, scale, pairs, kornia_features, mode='reference', reanchor_every=10,
+          anchor_by_flow=True) -> dict:
     current, reference = feature_budget(backend, scale, kornia_features)
     settings = RegisterSettings(backend=backend, scale=scale, max_features=current,
-                                reference_max_features=reference, mode=mode, reanchor_every=reanchor_every)
+                                reference_max_features=reference, mode=mode, reanchor_every=reanchor_every,
+                                anchor_by_flow=anchor_by_flow)
     rows, registrars = [], {}
     for view, frame in tqdm(pairs, desc=f'{backend} @ {scale:g}', unit='pair', leave=False):
         if view not in registrars:
@@ -68,7 +71,8 @@ def bench(dataset, backend, scale, pairs, kornia_features, mode='reference', rea
         cpu = time.process_time() - start
         err = (homography_error_px(r.ref_H_img, dataset.camera(view, frame), dataset.reference_camera(view),
                                    dataset.area, settings.exclude_boxes) if r.ok else float('nan'))
-        rows.append((r.seconds, r.matches, r.inliers, r.confidence, err, r.ok, cpu, r.message.startswith('tracked')))
+        rows.append((r.seconds, r.matches, r.inliers, r.confidence, err, r.ok, cpu, r.message.startswith('tracked'),
+                     r.message.startswith('anchor by flow')))
     a = np.array(rows, dtype=float)
     ok = a[:, 5] > 0
     return {'backend': backend, 'size': f'{round(1920 * scale)}x{round(1080 * scale)}', 'pairs': len(rows),
@@ -76,6 +80,7 @@ def bench(dataset, backend, scale, pairs, kornia_features, mode='reference', rea
             'failed': int((~ok).sum()), 'ms_median': 1000 * float(np.median(a[:, 0])),
             'ms_max': 1000 * float(np.max(a[:, 0])), 'cpu_ms_median': 1000 * float(np.median(a[:, 6])),
             'cpu_ms_p95': 1000 * float(np.percentile(a[:, 6], 95)), 'tracked': int(a[:, 7].sum()),
+            'anchors_by_flow': int(a[:, 8].sum()),
             'matches': float(np.median(a[:, 1])),
             'inliers': float(np.median(a[:, 2])), 'confidence': float(np.median(a[:, 3])),
             'err_median_px': float(np.median(a[ok, 4])) if ok.any() else float('nan'),
@@ -93,8 +98,8 @@ def simulated_acceptance(args) -> int:
         if not (folder / 'matrix_tracker_meta.json').is_file():
             simulate(SimulateSettings(config=variant, frames=args.sim_frames, seed=args.sim_seed, out=str(folder),
                                       width=args.sim_size[0], height=args.sim_size[1]))
-        run = acceptance_run(MatrixDataset(folder), RegisterSettings(mode=args.mode, reanchor_every=args.reanchor_every),
-                             progress=True)
+        run = acceptance_run(MatrixDataset(folder), RegisterSettings(mode=args.mode, reanchor_every=args.reanchor_every,
+                                                               anchor_by_flow=args.anchor_by_flow), progress=True)
         cpu = 1000 * np.array(run['cpu_seconds'])
         ok = run['pairs'] - len(run['failed'])
         met = not run['failed'] and run['error_px_median'] <= 0.5 and run['error_px_max'] <= 3.0
@@ -103,7 +108,7 @@ def simulated_acceptance(args) -> int:
               f"time {1000 * run['seconds_median']:4.0f} ms  error median {run['error_px_median']:.2f} px "
               f"max {run['error_px_max']:.2f} px (full-res-equivalent)  "
               f"{'meets' if met else 'MISSES'} the criteria; mode {args.mode}: CPU median {np.median(cpu):.0f} ms, "
-              f"p95 {np.percentile(cpu, 95):.0f} ms, by flow {run['tracked']}", flush=True)
+              f"p95 {np.percentile(cpu, 95):.0f} ms, by flow {run['tracked']}, anchors by flow {run['anchors_by_flow']}", flush=True)
         for pair, reason in run['failed'].items():
             print(f'  failed {pair}: {reason}')
     return int(missed > 0)
@@ -130,6 +135,9 @@ def main(argv=None) -> int:
                         help='registration mode (RegisterSettings.mode)')
     parser.add_argument('--reanchor_every', type=int, default=RegisterSettings().reanchor_every,
                         help='mode track: full registration every this many frames')
+    parser.add_argument('--anchor_by_flow', type=parse_bool,
+                        default=RegisterSettings().anchor_by_flow,
+                        help='mode track: anchors tried by flow to the reference first (true/false)')
     args = parser.parse_args(argv)
 
     cv2.setNumThreads(1)
@@ -151,7 +159,7 @@ def main(argv=None) -> int:
         for scale in args.scales:
             try:
                 table.append(bench(dataset, backend, scale, pairs, args.kornia_features, args.mode,
-                                   args.reanchor_every))
+                                   args.reanchor_every, args.anchor_by_flow))
             except MissingWeightsError as exc:
                 print(f'{backend}: skipped: {exc}', file=sys.stderr)
                 break
@@ -160,7 +168,7 @@ def main(argv=None) -> int:
                   f"time {row['ms_median']:7.0f} ms (max {row['ms_max']:6.0f})  matches {row['matches']:5.0f}  "
                   f"inliers {row['inliers']:5.0f}  c {row['confidence']:.2f}  error median {row['err_median_px']:.2f} px "
                   f"max {row['err_max_px']:.2f} px  CPU median {row['cpu_ms_median']:.0f} ms p95 {row['cpu_ms_p95']:.0f} "
-                  f"by flow {row['tracked']}", flush=True)
+                  f"by flow {row['tracked']}, anchors by flow {row['anchors_by_flow']}", flush=True)
     if args.json:
         Path(args.json).write_text(json.dumps(table, indent=1))
     return 0

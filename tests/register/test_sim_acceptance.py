@@ -71,10 +71,11 @@ def test_registration_that_tracks_meets_the_acceptance(variant, tmp_path):
              progress=False)
     run = acceptance_run(MatrixDataset(out), RegisterSettings(mode='track'), views=VIEWS[variant])
     figures = (f"{variant} track: {run['pairs'] - len(run['failed'])}/{run['pairs']} registered, "
-               f"{run['tracked']} by flow, error median {run['error_px_median']:.2f} / max "
+               f"{run['tracked']} by flow, {run['anchors_by_flow']} anchored by flow, error median {run['error_px_median']:.2f} / max "
                f"{run['error_px_max']:.2f} full-res-equivalent px")
     print(figures)
     assert not run['failed'] and run['pairs'] == 2 * FRAMES, f"{figures}; failed: {run['failed']}"
     assert run['tracked'] >= FRAMES, figures  # most frames by flow, not by features
+    assert run['anchors_by_flow'] >= 4, figures  # and many anchors (measured: 12)
     assert run['error_px_median'] <= 0.5, figures
     assert run['error_px_max'] <= 3.0, figures

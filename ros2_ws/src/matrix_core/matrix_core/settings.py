@@ -42,7 +42,8 @@ def settings_fields(cls) -> list:
     return out
 
 
-def _parse_bool(text: str) -> bool:
+def parse_bool(text: str) -> bool:
+    """A true/false flag or parameter value: 1/0, true/false, yes/no, on/off (any case)."""
     low = text.lower()
     if low in ('1', 'true', 'yes', 'on'):
         return True
@@ -62,7 +63,7 @@ def add_settings_arguments(parser: argparse.ArgumentParser, cls) -> None:
             raise TypeError(f'{cls.__name__}.{name}: unsupported setting type {typ}')
         if typ is bool and not extra:  # `--flag` alone means true; `--flag false` also works
             extra = {'nargs': '?', 'const': True}
-        group.add_argument(f'--{name}', type=_parse_bool if typ is bool else typ, default=default,
+        group.add_argument(f'--{name}', type=parse_bool if typ is bool else typ, default=default,
                            help=f'{help_text} (default: {default!r})', **extra)
 
 
@@ -81,7 +82,7 @@ def setting_to_string(value) -> str:
 
 
 def _from_string(typ, text: str):
-    return _parse_bool(text) if typ is bool else typ(text)
+    return parse_bool(text) if typ is bool else typ(text)
 
 
 def settings_from_strings(cls, values: dict):

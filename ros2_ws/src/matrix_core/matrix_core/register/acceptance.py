@@ -37,6 +37,7 @@ def acceptance_run(dataset, settings: RegisterSettings = None, views=None, frame
     Returns a dict: ``pairs``, ``failed`` ({'D1/7': reason}), ``errors_px`` (list, full-resolution-equivalent
     pixels, registered pairs only), ``error_px_median``, ``error_px_max``, ``seconds_median`` (per pair),
     ``cpu_seconds`` (list: CPU time of each pair's registration), ``tracked`` (pairs registered by flow, mode track),
+    ``anchors_by_flow`` (anchors made by flow to the reference, mode track),
     ``width`` (of the folder's images), ``settings`` (as used, after :func:`settings_for_width` and the
     dataset's own scene, see :mod:`matrix_core.register.scene`).
     """
@@ -47,7 +48,7 @@ def acceptance_run(dataset, settings: RegisterSettings = None, views=None, frame
     settings, _ = settings_for_dataset(settings, dataset)
     backend = make_backend(settings)
     factor = FULL_WIDTH / width
-    failed, errors, seconds, cpu, tracked = {}, [], [], [], 0
+    failed, errors, seconds, cpu, tracked, anchors_by_flow = {}, [], [], [], 0, 0
     with tqdm(total=len(views) * len(frames), desc='register', unit='pair', disable=not progress) as bar:
         for view in views:
             ref = dataset.reference_camera(view)
@@ -60,6 +61,7 @@ def acceptance_run(dataset, settings: RegisterSettings = None, views=None, frame
                 cpu.append(time.process_time() - start)
                 seconds.append(r.seconds)
                 tracked += r.message.startswith('tracked')
+                anchors_by_flow += r.message.startswith('anchor by flow')
                 if r.ok:
                     errors.append(factor * homography_error_px(r.ref_H_img, dataset.camera(view, frame), ref,
                                                                dataset.area, settings.exclude_boxes))
@@ -70,4 +72,4 @@ def acceptance_run(dataset, settings: RegisterSettings = None, views=None, frame
             'error_px_median': float(np.median(errors)) if errors else float('nan'),
             'error_px_max': float(np.max(errors)) if errors else float('nan'),
             'seconds_median': float(np.median(seconds)) if seconds else float('nan'),
-            'cpu_seconds': cpu, 'tracked': tracked, 'width': width, 'settings': settings}
+            'cpu_seconds': cpu, 'tracked': tracked, 'anchors_by_flow': anchors_by_flow, 'width': width, 'settings': settings}

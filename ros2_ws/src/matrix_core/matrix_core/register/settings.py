@@ -75,6 +75,11 @@ class RegisterSettings:
                 'first frame, after failures and when the chain is doubted)'})
     track_corners: int = field(default=2000, metadata={
         'help': 'mode track: corners detected on each anchor at the reduced scale, before the ground mask'})
+    anchor_by_flow: bool = field(default=True, metadata={
+        'help': 'mode track: an anchor is first tried by flow against the reference image itself (its ground '
+                "corners refined in the current frame warped by the chain's prediction, or followed from the "
+                'reference on the first frame): one hop to the reference like a full registration, at the cost '
+                'of a tracked frame; features are described and matched only when that fails'})
     track_min_inliers: int = field(default=40, metadata={
         'help': 'mode track: a frame whose refinement against the anchor has fewer inliers doubts the chain '
                 '(a full registration follows)'})
