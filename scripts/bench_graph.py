@@ -183,7 +183,9 @@ def report(name: str, runs: list, views: int) -> int:
     def med(key):
         values = [r[key] for r in runs if key in r]
         return float(np.median(values)) if values else float('nan')
-    cpu = {k: float(np.median([r['cpu'][k] for r in runs if 'cpu' in r])) for k in runs[0].get('cpu', {})}
+    # A process that exited before the last output (the player in real time, some runs) has no figure in that run.
+    names = sorted({k for r in runs for k in r.get('cpu', {})})
+    cpu = {k: float(np.median([r['cpu'][k] for r in runs if k in r.get('cpu', {})])) for k in names}
     total = sum(cpu.values())
     print(f'== {name} ({len(runs)} run{"s" if len(runs) > 1 else ""}, medians)')
     print(f'   frames played {med("played"):.0f}, dropped (no tracks) {med("dropped"):.0f}, fused without every '
