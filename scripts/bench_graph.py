@@ -156,6 +156,11 @@ def run_once(settings: GraphSettings, facts: BagFacts, run: Path, drain_s: float
     return figures
 
 
+def is_bad(run: dict) -> bool:
+    """A run where a process died, the player timed out waiting for a frame, or a frame got no tracks."""
+    return bool(run['crashed'] or run['timed_out'] or run['dropped'])
+
+
 def decode_costs(bag: Path, repeats: int = 20) -> str:
     """CPU ms (this process, one OpenCV thread) per decode of the bag's first JPEG: each of the separate
     processes (colour + grey) and the drone process (grey + resize to register's scale 0.25)."""
@@ -197,9 +202,10 @@ def report(name: str, runs: list, views: int) -> int:
              if total else ''))
     raw = sorted({t for r in runs for t in r['raw_topics']})
     print(f'   raw images on DDS: {", ".join(raw) if raw else "none"}')
-    bad = [r for r in runs if r['crashed'] or r['timed_out'] or r['dropped']]
+    bad = [r for r in runs if is_bad(r)]
     for r in bad:
-        print(f'   WARNING: crashed {r["crashed"]}, lockstep timed out {r["timed_out"]}, dropped {r["dropped"]}')
+        print(f'   WARNING: crashed {r["crashed"]}, lockstep timed out {r["timed_out"]}, dropped {r["dropped"]}'
+              + (f'; logs: {r["logs"]}/' if 'logs' in r else ''))
     return 1 if bad else 0
 
 
@@ -216,6 +222,8 @@ def main() -> int:
                    "none = Fast DDS's own defaults)")
     p.add_argument('--register_params', default='', help="register's ROS parameter file (default: matrix_register/"
                    "config/register.yaml, the live graph's: mode track); e.g. one with mode: reference to compare")
+    p.add_argument('--lockstep_timeout', type=float, default=300.0,
+                   help='seconds the player waits for a frame to be done before going on (a WARNING line)')
     p.add_argument('--checkpoint', default='', help='BEV checkpoint (default: the fuse node default)')
     p.add_argument('--sample', default=os.environ.get('MATRIX_SHARED', str(ROOT.parent / 'shared')) + '/matrix_sample')
     p.add_argument('--out', default=str(ROOT / 'out/bench_graph'))
@@ -244,11 +252,18 @@ def main() -> int:
                     bag=str(bag), dataset=str(dataset), drones_per_process=args.drones_per_process,
                     drone_process=not args.separate, checkpoint=args.checkpoint, monitor=True,
                     monitor_out=str(out / 'run' / 'monitor'), record=str(out / 'run' / 'recording'),
-                    lockstep=mode == 'lockstep', lockstep_timeout=300.0, rate=period * args.hz,
+                    lockstep=mode == 'lockstep', lockstep_timeout=args.lockstep_timeout, rate=period * args.hz,
                     dds_profile=args.dds_profile, register_params=args.register_params)
                 facts = BagFacts.read(settings.bag, settings.views)
-                runs = [run_once(settings, facts, out / 'run') for _ in range(args.runs)]
                 label = mode if mode == 'lockstep' else f'realtime {args.hz:g} Hz'
+                runs = []
+                for i in range(args.runs):
+                    runs.append(run_once(settings, facts, out / 'run'))
+                    if is_bad(runs[-1]):   # the next run would overwrite the logs that say why
+                        kept = out / 'failed' / f'{name}, {label}, run {i + 1}'.replace(' ', '_').replace(',', '')
+                        shutil.rmtree(kept, ignore_errors=True)
+                        shutil.copytree(out / 'run' / 'logs', kept)
+                        runs[-1]['logs'] = str(kept)
                 code |= report(f'{name}, {label}', runs, len(settings.views))
     finally:
         rclpy.try_shutdown()

@@ -62,16 +62,21 @@ class GraphMonitor(Node):
         self.needed = {(stage, v) for stage in s.wait_for if stage != 'tracks' for v in s.views}
         self.needed |= {('tracks', '')} if 'tracks' in s.wait_for else set()
         self.announced = set()
+        self.first_seen = {}   # stamp -> monotonic time of the frame's first message (any topic)
+        self.warned = set()    # stamps warned about (waiting_warning)
         self.create_timer(0.5, self._check)
 
     def _key(self, view, msg):
         self.last_arrival = time.monotonic()
-        return view, round(stamp_to_seconds(msg.header.stamp), 6)
+        stamp = round(stamp_to_seconds(msg.header.stamp), 6)
+        self.first_seen.setdefault(stamp, self.last_arrival)
+        return view, stamp
 
     def _processed(self, stage: str, view: str, header) -> None:
         """Note that ``stage`` processed ``view``'s frame at ``header.stamp``; announce the frame once done."""
         self.last_arrival = time.monotonic()
         stamp = round(stamp_to_seconds(header.stamp), 6)
+        self.first_seen.setdefault(stamp, self.last_arrival)
         seen = self.processed.setdefault(stamp, set())
         seen.add((stage, view))
         if stamp not in self.announced and self.needed <= seen:
@@ -105,6 +110,7 @@ class GraphMonitor(Node):
     def _check(self):
         s = self.settings
         quiet = time.monotonic() - self.last_arrival
+        self._warn_waiting()
         # Calibration publishes nothing for a drone without a good pose yet: once every frame's
         # homographies are in, a short quiet period means nothing more is coming.
         if s.expected_frames and len(self.announced) >= s.expected_frames and quiet > s.settle_time:
@@ -113,6 +119,21 @@ class GraphMonitor(Node):
         elif quiet > s.idle_timeout:
             self.get_logger().info(f'nothing arrived for {s.idle_timeout:.0f} s')
             self.finish()
+
+    def missing(self, stamp: float) -> list:
+        """'stage/view' (or 'tracks') of every part frame ``stamp`` still waits for, sorted."""
+        seen = self.processed.get(stamp, set())
+        return sorted(f'{stage}/{view}' if view else stage for stage, view in self.needed - seen)
+
+    def _warn_waiting(self) -> None:
+        """Name, once, what a frame not done ``waiting_warning`` seconds after its first message waits for."""
+        now = time.monotonic()
+        for stamp, first in sorted(self.first_seen.items()):
+            if stamp in self.announced or stamp in self.warned or now - first < self.settings.waiting_warning:
+                continue
+            self.warned.add(stamp)
+            self.get_logger().warning(f'frame t={stamp:.3f} s not done {now - first:.0f} s after its first '
+                                      f'message; waiting for {", ".join(self.missing(stamp))}')
 
     def finish(self):
         s = self.settings

@@ -20,6 +20,9 @@ class GraphMonitorSettings:
         'help': 'matrix_msgs/TrackArray topic of the tracks stage'})
     settle_time: float = field(default=3.0, metadata={
         'help': 'after expected_frames are done, stop once nothing arrived for this long, seconds'})
+    waiting_warning: float = field(default=10.0, metadata={
+        'help': 'warn once about a frame still not done this many seconds after its first message, naming the '
+                'stages and views it waits for, seconds'})
     idle_timeout: float = field(default=30.0, metadata={'help': 'stop when nothing arrived for this long, seconds'})
     area: list[float] = field(default_factory=lambda: list(MATRIX_AREA), metadata={
         'help': 'scene ground x_min y_min x_max y_max (internal world metres) for the scores and picture'})
