@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 
 import cv2
+from threadpoolctl import threadpool_limits
 import numpy as np
 from tqdm import tqdm
 
@@ -114,12 +115,15 @@ def main() -> int:
                         help='mode track: full registration every this many frames (RegisterSettings.reanchor_every)')
     parser.add_argument('--anchor_by_flow', type=parse_bool, default=defaults.anchor_by_flow,
                         help='mode track: anchors tried by flow to the reference first (RegisterSettings.anchor_by_flow)')
+    parser.add_argument('--matcher', choices=['flann', 'brute'], default=defaults.matcher,
+                        help='nearest-neighbour search of the feature matching (RegisterSettings.matcher)')
     add_settings_arguments(parser, CalibSettings)   # e.g. --track_corners true; the config follows each folder
     args = parser.parse_args()
     calib_settings = settings_from_namespace(CalibSettings, args)
     register_settings = RegisterSettings(mode=args.mode, reanchor_every=args.reanchor_every,
-                                         anchor_by_flow=args.anchor_by_flow)
+                                         anchor_by_flow=args.anchor_by_flow, matcher=args.matcher)
     cv2.setNumThreads(1)
+    threadpool_limits(1, user_api='blas')   # as the nodes (NodeSettings.apply_threads)
     import torch
     torch.set_num_threads(1)
     shared = Path(os.environ.get('MATRIX_SHARED', str(root.parent / 'shared')))

@@ -29,6 +29,7 @@ import time
 from pathlib import Path
 
 import cv2
+from threadpoolctl import threadpool_limits
 import numpy as np
 from tqdm import tqdm
 
@@ -54,11 +55,11 @@ def feature_budget(backend: str, scale: float, kornia_features: int) -> tuple:
 
 
 def bench(dataset, backend, scale, pairs, kornia_features, mode='reference', reanchor_every=10,
-          anchor_by_flow=True) -> dict:
+          anchor_by_flow=True, matcher='brute') -> dict:
     current, reference = feature_budget(backend, scale, kornia_features)
     settings = RegisterSettings(backend=backend, scale=scale, max_features=current,
                                 reference_max_features=reference, mode=mode, reanchor_every=reanchor_every,
-                                anchor_by_flow=anchor_by_flow)
+                                anchor_by_flow=anchor_by_flow, matcher=matcher)
     rows, registrars = [], {}
     for view, frame in tqdm(pairs, desc=f'{backend} @ {scale:g}', unit='pair', leave=False):
         if view not in registrars:
@@ -99,7 +100,8 @@ def simulated_acceptance(args) -> int:
             simulate(SimulateSettings(config=variant, frames=args.sim_frames, seed=args.sim_seed, out=str(folder),
                                       width=args.sim_size[0], height=args.sim_size[1]))
         run = acceptance_run(MatrixDataset(folder), RegisterSettings(mode=args.mode, reanchor_every=args.reanchor_every,
-                                                               anchor_by_flow=args.anchor_by_flow), progress=True)
+                                                               anchor_by_flow=args.anchor_by_flow,
+                                                               matcher=args.matcher), progress=True)
         cpu = 1000 * np.array(run['cpu_seconds'])
         ok = run['pairs'] - len(run['failed'])
         met = not run['failed'] and run['error_px_median'] <= 0.5 and run['error_px_max'] <= 3.0
@@ -138,9 +140,12 @@ def main(argv=None) -> int:
     parser.add_argument('--anchor_by_flow', type=parse_bool,
                         default=RegisterSettings().anchor_by_flow,
                         help='mode track: anchors tried by flow to the reference first (true/false)')
+    parser.add_argument('--matcher', choices=['flann', 'brute'], default=RegisterSettings().matcher,
+                        help='nearest-neighbour search of the feature matching (RegisterSettings.matcher)')
     args = parser.parse_args(argv)
 
     cv2.setNumThreads(1)
+    threadpool_limits(1, user_api='blas')   # as the nodes (NodeSettings.apply_threads)
     try:
         import torch
         torch.set_num_threads(1)
@@ -159,7 +164,7 @@ def main(argv=None) -> int:
         for scale in args.scales:
             try:
                 table.append(bench(dataset, backend, scale, pairs, args.kornia_features, args.mode,
-                                   args.reanchor_every, args.anchor_by_flow))
+                                   args.reanchor_every, args.anchor_by_flow, args.matcher))
             except MissingWeightsError as exc:
                 print(f'{backend}: skipped: {exc}', file=sys.stderr)
                 break

@@ -7,6 +7,7 @@ its ``__post_init__`` checks the wiring and then hands over to the core settings
 from dataclasses import dataclass, field
 
 import cv2
+from threadpoolctl import threadpool_limits
 
 from matrix_ros.qos import QOS_NAMES, qos_by_name
 
@@ -17,8 +18,8 @@ class NodeSettings:
         'help': f'QoS of the image subscriptions, one of {", ".join(QOS_NAMES)} (reliable: large images '
                 'survive; sensor_data: best effort)'})
     threads: int = field(default=1, metadata={
-        'help': 'OpenCV worker threads of this process (1: one core; idle pool threads of many processes on '
-                'few cores cost CPU)'})
+        'help': 'OpenCV and BLAS (numpy) worker threads of this process (1: one core; idle pool threads of '
+                'many processes on few cores cost CPU)'})
 
     def __post_init__(self):
         qos_by_name(self.qos)   # raises naming the valid names
@@ -28,8 +29,12 @@ class NodeSettings:
             super().__post_init__()
 
     def apply_threads(self) -> None:
-        """Limit OpenCV's worker pool of this process to ``threads``."""
+        """Limit OpenCV's and numpy's BLAS worker pools of this process to ``threads``.
+
+        BLAS matters for the exact feature matcher's distance matrix: OpenBLAS threads spin while they wait,
+        so two of them on a loaded 2-core machine cost about twice one's CPU time for the same product."""
         cv2.setNumThreads(self.threads)
+        threadpool_limits(self.threads, user_api='blas')
 
 
 def hosted_drones(node, views) -> list:
