@@ -4,7 +4,9 @@ Per view ``V`` in ``views``: the image (``image_topic`` Image and/or ``compresse
 ``image_kind``) and the frame's geometry, ``homography_topic`` (register's registration; a failed or unusable
 one, or a confidence below ``min_confidence``, makes the view missing) or ``camera_info_topic`` (CameraInfo
 ``p = K [R | t]`` from calib or a bag's ground truth), per ``input_kind``; relative patterns
-(``matrix_core.topics``); images are subscribed once the geometry stream has a publisher (``matrix_ros.connect``).
+(``matrix_core.topics``); images are subscribed once the geometry stream has a publisher (``matrix_ros.connect``),
+the geometry with ``geometry_qos`` (default history: also what a drone published before its publisher matched
+this node); a frame with geometry but no image at all (e.g. such history after a restart) is not fused.
 ``dropped_topic``: a drone's notice (std_msgs/Header) that ``link_sender`` did not send a frame stands in for its image.
 Messages are grouped by stamp (``matrix_core.sync``); a frame is fused when every view arrived or
 ``sync_timeout`` wall seconds after its first message (a stopped drone never stalls the graph), by
@@ -70,7 +72,7 @@ class FuseNode(Node):
         geometry_type, pattern = ((HomographyStamped, s.homography_topic) if s.input_kind == 'homography'
                                   else (CameraInfo, s.camera_info_topic))
         geometry = self.create_subscription(geometry_type, s.topic(pattern, view),
-                                            lambda m: self._add(view, 'geometry', m), 10)
+                                            lambda m: self._add(view, 'geometry', m), qos_by_name(s.geometry_qos))
 
         def subscribe_images():
             for kind, msg_type, image_pattern in (('raw', Image, s.image_topic),
@@ -115,6 +117,12 @@ class FuseNode(Node):
 
     def _fuse(self, frame) -> None:
         s, t0 = self.settings, time.perf_counter()
+        if not any(f'{v}/image' in frame.items for v in s.views):
+            # geometry_qos history: what the drones published before this node started (e.g. after a
+            # restart) arrives too; without a single image there is nothing to see, so nothing is published.
+            self.get_logger().warning(f't={frame.stamp:.3f} s: geometry without any image (published before this '
+                                      'node matched?); not fused', throttle_duration_sec=5.0)
+            return
         views = {v: self.inputs.view_input(v, frame.items.get(f'{v}/image'), frame.items.get(f'{v}/geometry'),
                                            s.input_kind) for v in s.views}
         for v, view in views.items():

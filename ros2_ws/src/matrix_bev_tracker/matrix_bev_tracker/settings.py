@@ -9,6 +9,9 @@ from matrix_core.fusion.settings import FuseSettings
 from matrix_ros.node_settings import NodeSettings
 
 
+GEOMETRY_QOS = ('history', 'reliable')   # never best effort: a lost homography loses the view's frame
+
+
 @dataclass
 class FuseNodeSettings(NodeSettings, ImageBoxSettings, FuseSettings):
     tracks_topic: str = field(default=topics.TRACKS, metadata={'help': 'matrix_msgs/TrackArray of the tracks'})
@@ -29,12 +32,23 @@ class FuseNodeSettings(NodeSettings, ImageBoxSettings, FuseSettings):
         'help': 'MATRIX folder of the scene (the one the graph replays): its reference intrinsics give the camera '
                 'a registration implies (input_kind homography), its meta the obstacles; "" = no 2D outputs '
                 'from homographies'})
+    geometry_qos: str = field(default='history', metadata={
+        'help': 'QoS of the homography / camera_info subscriptions: history (transient local: also what a '
+                'publisher sent before it matched this node; discovery is one-sided, so a drone may publish its '
+                'first homography before it knows this node, though this node already knows the drone) or '
+                'reliable (volatile; for publishers that offer only volatile durability)'})
     world_frame: str = field(default=topics.WORLD_FRAME, metadata={'help': 'frame_id of everything published'})
     stamp_tolerance: float = field(default=0.001, metadata={'help': 'stamps closer than this (s) are one frame'})
     jpeg_reduced_decode: bool = field(default=True, metadata={
         'help': 'decode JPEG images directly at 1/2, 1/4 or 1/8 size when that still covers the network input '
                 '(1920x1080 -> 960x540 for 480x272): about 0.1 s less per frame of 8 views; pixels differ from a '
                 'full decode + resize by < 1 grey level'})
+
+
+    def __post_init__(self):
+        if self.geometry_qos not in GEOMETRY_QOS:
+            raise ValueError(f'geometry_qos must be one of {", ".join(GEOMETRY_QOS)}, got {self.geometry_qos!r}')
+        super().__post_init__()
 
 
 # What `ros2 param set /fuse NAME VALUE` may change while the node runs (the node reads them each frame);

@@ -7,6 +7,10 @@ frame's homography for good (a lockstep replay then waits for that frame until i
 images are subscribed only after the homography stream has a matched publisher, whoever waits for the
 image subscription (the player's ``wait_for_subscribers``) also waits for the homography connection.
 Images without their geometry are of no use to these nodes, so nothing is lost by subscribing later.
+This closes only one side: discovery runs each way separately, so the subscription may see its publisher
+while that publisher does not see the subscription yet, and what it publishes meanwhile still misses it. A
+subscriber that cannot lose a message also asks for transient-local history (fuse: ``geometry_qos``), which
+the workspace's publishers offer (``matrix_ros.qos``).
 """
 
 from typing import Callable
