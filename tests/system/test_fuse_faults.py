@@ -162,17 +162,16 @@ def test_faults_and_restart(node_executable, tmp_path):
     assert all(t.age == 0 for t in fresh) and (not fresh or min(t.id for t in fresh) == 1), log2
 
 
-def test_homographies_published_before_the_node_matched_still_arrive(node_executable, tmp_path):
-    # Discovery runs each way separately: a drone may publish a frame's homography while fuse, which already
-    # sees the drone's publisher (and so subscribed the images), is not yet known to it. Publishing before the
-    # node even starts is the extreme case of that window.
+def _views_used_when_homographies_come_first(node_executable, tmp_path, *params) -> tuple:
+    """Frame 0's homographies published before a fuse node starts, its images once fuse subscribed them:
+    (views fused in that frame, the node's log)."""
     assert cli(['simulate', '--config', 'complex', '--frames', '1', '--seed', '9', '--fast', '--image_ext', '.jpg',
                 '--out', str(tmp_path / 'sim')]) == 0
     drones = Drones(open_dataset(tmp_path / 'sim'))
     fuse = None
     try:
         stamp = drones.publish(0, images=False, wait=False)
-        fuse = _fuse(node_executable, 'sync_timeout:=120.0')   # a lost homography would hold the frame 120 s
+        fuse = _fuse(node_executable, *params)
         assert drones.wait_for_fuse(), 'fuse node did not subscribe'
         drones.publish(0, homographies=False, wait=False)
         assert drones.spin_until(lambda: stamp in drones.tracks and stamp in drones.diags, 60.0), 'no tracks'
@@ -181,29 +180,22 @@ def test_homographies_published_before_the_node_matched_still_arrive(node_execut
         if fuse is not None and fuse.poll() is None:
             stop(fuse)
         drones.close()
-    used = next(kv.value for kv in drones.diags[stamp]['fuse'].values if kv.key == 'views_used')
-    assert int(used) == 8, log
+    return int(next(kv.value for kv in drones.diags[stamp]['fuse'].values if kv.key == 'views_used')), log
+
+
+def test_homographies_published_before_the_node_matched_still_arrive(node_executable, tmp_path):
+    # Discovery runs each way separately: a drone may publish a frame's homography while fuse, which already
+    # sees the drone's publisher (and so subscribed the images), is not yet known to it. Publishing before the
+    # node even starts is the extreme case of that window. A lost homography would hold the frame 120 s.
+    used, log = _views_used_when_homographies_come_first(node_executable, tmp_path, 'sync_timeout:=120.0')
+    assert used == 8, log
 
 
 def test_a_volatile_geometry_qos_loses_what_was_published_before(node_executable, tmp_path):
     # The reason for geometry_qos history: with 'reliable' (volatile) the same start loses every homography.
-    assert cli(['simulate', '--config', 'complex', '--frames', '1', '--seed', '9', '--fast', '--image_ext', '.jpg',
-                '--out', str(tmp_path / 'sim')]) == 0
-    drones = Drones(open_dataset(tmp_path / 'sim'))
-    fuse = None
-    try:
-        stamp = drones.publish(0, images=False, wait=False)
-        fuse = _fuse(node_executable, 'sync_timeout:=3.0', 'geometry_qos:=reliable')
-        assert drones.wait_for_fuse(), 'fuse node did not subscribe'
-        drones.publish(0, homographies=False, wait=False)
-        assert drones.spin_until(lambda: stamp in drones.diags, 60.0), 'no diagnostics'
-        log = stop(fuse)
-    finally:
-        if fuse is not None and fuse.poll() is None:
-            stop(fuse)
-        drones.close()
-    used = next(kv.value for kv in drones.diags[stamp]['fuse'].values if kv.key == 'views_used')
-    assert int(used) == 0, log
+    used, log = _views_used_when_homographies_come_first(node_executable, tmp_path, 'sync_timeout:=3.0',
+                                                         'geometry_qos:=reliable')
+    assert used == 0, log
 
 
 def test_images_wait_for_the_homography_stream(node_executable):
