@@ -56,6 +56,16 @@ def test_an_image_its_drone_did_not_send_makes_the_view_missing_saying_so(real):
         assert not view.usable and view.reason == NOT_SENT and view.reason.startswith('no image')
 
 
+def test_a_frame_of_geometry_without_any_image_gives_no_views(real):
+    # geometry_qos history replayed after a restart: nothing to see, so the node fuses nothing
+    camera, image = real
+    inputs, geometry = _inputs(), _homography(camera)
+    assert inputs.frame_views({'D1/geometry': geometry, 'D2/geometry': geometry}, ['D1', 'D2'], 'homography') is None
+    views = inputs.frame_views({'D1/geometry': geometry, 'D1/image': image_to_compressed(image),
+                                'D2/geometry': geometry}, ['D1', 'D2'], 'homography')
+    assert views['D1'].usable and views['D2'].reason == 'no image'
+
+
 @pytest.mark.parametrize('make, reason', [
     (lambda img: image_to_compressed(img[::3, ::3].copy()), 'image is 640x360, its camera_info is for 1920x1080'),
     (lambda img: image_to_msg(img[:540, :960].copy()), 'image is 960x540, its camera_info is for 1920x1080'),

@@ -18,6 +18,7 @@ def test_complete_frame_is_emitted_when_last_stream_arrives():
     (frame,) = sync.add('D2/image', 1.0, 'b', now=0.2)
     assert frame.reason == 'complete' and frame.missing == [] and frame.stamp == 1.0
     assert frame.items == {'D1/image': 'a', 'D2/image': 'b', 'D3/image': 'c'}
+    assert frame.first_arrival == 0.0   # when its first item came: how long the frame waited (fuse diagnostics)
 
 
 def test_stopped_stream_times_out_with_the_views_that_arrived():
@@ -27,6 +28,7 @@ def test_stopped_stream_times_out_with_the_views_that_arrived():
     assert sync.poll(10.4) == []
     (frame,) = sync.poll(10.5)
     assert frame.reason == 'timeout' and frame.missing == ['D3/image'] and set(frame.items) == {'D1/image', 'D2/image'}
+    assert frame.first_arrival == 10.0
     # the stopped stream's late item is refused and counted, not silently merged
     assert sync.add('D3/image', 1.0, 'c', now=10.6) == [] and sync.late_items == 1
 

@@ -4,9 +4,8 @@ Per view ``V`` in ``views``: the image (``image_topic`` Image and/or ``compresse
 ``image_kind``) and the frame's geometry, ``homography_topic`` (register's registration; a failed or unusable
 one, or a confidence below ``min_confidence``, makes the view missing) or ``camera_info_topic`` (CameraInfo
 ``p = K [R | t]`` from calib or a bag's ground truth), per ``input_kind``; relative patterns
-(``matrix_core.topics``); images are subscribed once the geometry stream has a publisher (``matrix_ros.connect``),
-the geometry with ``geometry_qos`` (default history: also what a drone published before its publisher matched
-this node); a frame with geometry but no image at all (e.g. such history after a restart) is not fused.
+(``matrix_core.topics``); images once the geometry has a publisher (``matrix_ros.connect``), the geometry with
+``geometry_qos`` (default history: also what a drone published before it matched this node).
 ``dropped_topic``: a drone's notice (std_msgs/Header) that ``link_sender`` did not send a frame stands in for its image.
 Messages are grouped by stamp (``matrix_core.sync``); a frame is fused when every view arrived or
 ``sync_timeout`` wall seconds after its first message (a stopped drone never stalls the graph), by
@@ -90,7 +89,6 @@ class FuseNode(Node):
         s = self.settings
         streams = [f'{v}/{part}' for v in s.views for part in ('image', 'geometry')]
         self.sync = FrameSynchronizer(FrameSyncSettings(streams, s.sync_timeout, s.stamp_tolerance))
-        self.first_arrival = {}   # stamp -> wall time of its first message
         self.late_reported = 0
         self.last_fused = None
         self.fuser.reset()
@@ -102,7 +100,6 @@ class FuseNode(Node):
             self.get_logger().warning(f't={stamp:.3f} s is {self.last_fused - stamp:.1f} s before the last fused '
                                       f'frame: time went back, starting fresh')
             self._start_fresh()
-        self.first_arrival.setdefault(round(stamp, 6), now)
         frames = self.sync.add(f'{view}/{part}', stamp, msg, now)
         if self.sync.late_items > self.late_reported:
             self.late_reported = self.sync.late_items
@@ -117,17 +114,13 @@ class FuseNode(Node):
 
     def _fuse(self, frame) -> None:
         s, t0 = self.settings, time.perf_counter()
-        if not any(f'{v}/image' in frame.items for v in s.views):
-            # geometry_qos history: what the drones published before this node started (e.g. after a
-            # restart) arrives too; without a single image there is nothing to see, so nothing is published.
+        views = self.inputs.frame_views(frame.items, s.views, s.input_kind)
+        if views is None:   # geometry_qos history (e.g. after a restart) without a single image
             self.get_logger().warning(f't={frame.stamp:.3f} s: geometry without any image (published before this '
                                       'node matched?); not fused', throttle_duration_sec=5.0)
             return
-        views = {v: self.inputs.view_input(v, frame.items.get(f'{v}/image'), frame.items.get(f'{v}/geometry'),
-                                           s.input_kind) for v in s.views}
-        for v, view in views.items():
-            if view.reason and not view.reason.startswith('no '):
-                self.get_logger().error(f'{v}: not used for this frame: {view.reason}')
+        for v in [v for v, view in views.items() if view.reason and not view.reason.startswith('no ')]:
+            self.get_logger().error(f'{v}: not used for this frame: {views[v].reason}')
         result = self.fuser.process_safely(frame.stamp, views, decode_s=time.perf_counter() - t0)
         failed = [st.reason for st in result.views.values() if st.reason.startswith('fusion failed')]
         if failed:
@@ -141,16 +134,13 @@ class FuseNode(Node):
         if 'heatmap' in self.pubs:
             self.pubs['heatmap'].publish(out.heatmap_msg(header, self.fuser.grid, result.heatmap))
         self.frames_published += 1
-        first = self.first_arrival.pop(round(frame.stamp, 6), time.monotonic())
-        for k in [k for k in self.first_arrival if k < frame.stamp]:   # frames the sync refused as late
-            del self.first_arrival[k]
         result.timing['publish_s'] = time.perf_counter() - t0 - result.timing['decode_s'] - result.timing['total_s']
         latency = self.get_clock().now().nanoseconds * 1e-9 - frame.stamp
         if missing := out.missing_views_text(frame, result):
             self.get_logger().warning(missing)
         if result.resets:
             self.get_logger().info(f't={frame.stamp:.3f} s: reset {" and ".join(result.resets)} state')
-        self.pubs['diagnostics'].publish(out.fuse_diagnostics(header, frame, result, time.monotonic() - first, latency,
+        self.pubs['diagnostics'].publish(out.fuse_diagnostics(header, frame, result, time.monotonic() - frame.first_arrival, latency,
                                                               self.sync.late_items, self.frames_published))
 
     def _on_reset(self, request, response):

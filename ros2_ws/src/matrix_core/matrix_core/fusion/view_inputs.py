@@ -55,6 +55,14 @@ class ViewInputs:
         self.input_size, self.min_confidence, self.reduced_decode = input_size, min_confidence, reduced_decode
         self.full_size = {}   # view -> (w, h) of its last fully decoded image
 
+    def frame_views(self, items: dict, views: list, geometry_name: str) -> dict | None:
+        """Every view's :class:`ViewInput` from a synchronised frame's items (``'V/image'``, ``'V/geometry'``);
+        None when no view has an image at all (e.g. geometry history replayed after a restart): nothing to see."""
+        if not any(f'{v}/image' in items for v in views):
+            return None
+        return {v: self.view_input(v, items.get(f'{v}/image'), items.get(f'{v}/geometry'), geometry_name)
+                for v in views}
+
     def view_input(self, view: str, image_msg, geometry_msg, geometry_name: str) -> ViewInput:
         """One view's :class:`ViewInput`; any problem becomes its reason. ``geometry_name`` names the missing
         geometry in that reason (e.g. 'homography')."""

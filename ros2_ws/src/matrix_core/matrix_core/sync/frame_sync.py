@@ -38,12 +38,14 @@ class SyncedFrame:
         missing: required streams that did not arrive (sorted).
         reason: 'complete', 'timeout' (waited ``timeout``), 'superseded' (a newer frame completed first),
             'overflow' (more than ``max_pending`` frames waiting) or 'restart' (a new sequence began).
+        first_arrival: ``now`` when its first item arrived (the caller's clock): how long the frame waited.
     """
 
     stamp: float
     items: dict
     missing: list
     reason: str
+    first_arrival: float
 
 
 @dataclass
@@ -130,4 +132,4 @@ class FrameSynchronizer:
         self._pending.remove(pending)
         self._last_emitted = pending.stamp
         missing = sorted(set(self.settings.streams) - set(pending.items))
-        return SyncedFrame(pending.stamp, dict(pending.items), missing, reason)
+        return SyncedFrame(pending.stamp, dict(pending.items), missing, reason, pending.first_arrival)
