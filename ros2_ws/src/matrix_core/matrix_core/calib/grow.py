@@ -35,6 +35,7 @@ GROW_SHIFT = 4  # largest whole-square correction considered (the initial prior 
 TRACK_VERIFY_SHIFT = 2
 SETTLED_DEG, SETTLED_M = 0.03, 0.015  # a re-solved pose this close to the last one has settled
 MAX_MOVE_SQUARES = 0.15  # a refined corner further than this from where a solved pose predicts it is no saddle
+PREFILTER_CONTRAST = 0.5  # of min_contrast: what a saddle shows at its prediction to be refined at all
 
 
 @dataclass
@@ -75,28 +76,42 @@ def saddle_map(gray: np.ndarray, camera: Camera, board: Checkerboard, px_per_squ
     img_H_rect = image_H_board(camera, board) @ ij_H_rect
     rect = cv2.warpPerspective(gray, img_H_rect, size, flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
     pred = (ij - [o_i, o_j]) * px_per_square
-    half = max(2, int(px_per_square * 0.4))
-    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.01)
-    refined = cv2.cornerSubPix(rect, pred.astype(np.float32).reshape(-1, 1, 2).copy(), (half, half),
-                               (-1, -1), criteria).reshape(-1, 2).astype(np.float64)
-    moved = np.linalg.norm(refined - pred, axis=1) / px_per_square
-    d = 0.3 * px_per_square
     smooth = cv2.GaussianBlur(rect, (3, 3), 0).astype(np.float32)
+    sign = board.cell_sign(ij[:, 0], ij[:, 1])
+    refined, polarity = pred.astype(np.float64), np.zeros(len(ij), dtype=int)
+    # From a solved pose a saddle is predicted within max_move_squares (< half the 0.3-square sampling offset),
+    # so it already shows (weakly) at its prediction; the rest (most of the virtual corners beyond the board,
+    # where cornerSubPix runs all its iterations on ground) are not refined at all. From a rough prior it may
+    # not show yet: refine everything.
+    todo = (_polarity(smooth, pred, px_per_square, min_contrast * PREFILTER_CONTRAST) != 0
+            if max_move_squares <= MAX_MOVE_SQUARES else np.ones(len(ij), dtype=bool))
+    if todo.any():
+        half = max(2, int(px_per_square * 0.4))
+        criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.01)
+        refined[todo] = cv2.cornerSubPix(rect, pred[todo].astype(np.float32).reshape(-1, 1, 2).copy(), (half, half),
+                                         (-1, -1), criteria).reshape(-1, 2).astype(np.float64)
+        moved = np.linalg.norm(refined[todo] - pred[todo], axis=1) / px_per_square
+        polarity[todo] = np.where(moved > max_move_squares, 0,
+                                  _polarity(smooth, refined[todo], px_per_square, min_contrast) * sign[todo])
+    back = cv2.perspectiveTransform(refined.reshape(-1, 1, 2), img_H_rect).reshape(-1, 2)
+    return SaddleMap(board, ij, back, polarity)
+
+
+def _polarity(smooth: np.ndarray, pts: np.ndarray, px_per_square: float, min_contrast: float) -> np.ndarray:
+    """(M,) +1 where the squares at -i-j / +i+j of each rectified pixel ``pts`` (M, 2) are light, -1 where
+    they are dark, 0 where the four samples 0.3 squares around it are no saddle of ``min_contrast``."""
+    d = 0.3 * px_per_square
     quad = []
     for dx, dy in ((-d, -d), (d, -d), (d, d), (-d, d)):
-        pts = (refined + [dx, dy]).astype(np.float32)
-        quad.append(cv2.remap(smooth, pts[:, 0].reshape(1, -1), pts[:, 1].reshape(1, -1), cv2.INTER_LINEAR)[0])
+        p = (pts + [dx, dy]).astype(np.float32)
+        quad.append(cv2.remap(smooth, p[:, 0].reshape(1, -1), p[:, 1].reshape(1, -1), cv2.INTER_LINEAR)[0])
     q = np.array(quad)
     # The square towards -i, -j of corner (i, j) is cell (i, j): light when its sign is +1.
     # A saddle needs BOTH squares of one diagonal brighter than both of the other: at the board's outer
     # edge two of the four samples are ground, which cancels in a plain diagonal difference but not here.
     light_first = np.minimum(q[0], q[2]) - np.maximum(q[1], q[3])
     dark_first = np.minimum(q[1], q[3]) - np.maximum(q[0], q[2])
-    sign = board.cell_sign(ij[:, 0], ij[:, 1])
-    polarity = np.where(light_first >= min_contrast, 1, np.where(dark_first >= min_contrast, -1, 0)) * sign
-    polarity[moved > max_move_squares] = 0
-    back = cv2.perspectiveTransform(refined.reshape(-1, 1, 2), img_H_rect).reshape(-1, 2)
-    return SaddleMap(board, ij, back, polarity)
+    return np.where(light_first >= min_contrast, 1, np.where(dark_first >= min_contrast, -1, 0))
 
 
 def saddle_counts(maps: list, max_shift: int = 2) -> dict:
