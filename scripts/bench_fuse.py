@@ -34,7 +34,7 @@ from tqdm import tqdm
 from matrix_core.geometry.homography import pixel_scale_homography
 from matrix_core.datasets import open_dataset
 from matrix_ros.conversions import image_to_compressed, image_to_msg, seconds_to_stamp, stamp_to_seconds
-from matrix_ros.qos import qos_by_name
+from matrix_ros.qos import publisher_qos, qos_by_name
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -48,7 +48,7 @@ class Feeder:
         kind = Image if raw else CompressedImage
         topic = '/{}/image_raw' if raw else '/{}/image/compressed'
         self.img_pubs = {v: self.node.create_publisher(kind, topic.format(v), qos) for v in self.views}
-        self.hom_pubs = {v: self.node.create_publisher(HomographyStamped, f'/{v}/homography', 10) for v in self.views}
+        self.hom_pubs = {v: self.node.create_publisher(HomographyStamped, f'/{v}/homography', publisher_qos()) for v in self.views}
         self.received = {}   # stamp -> wall time the TrackArray arrived
         self.node.create_subscription(TrackArray, '/tracks', self._on_tracks, 100)
         self.stages = []     # the fuse node's own timing per frame (its /diagnostics)
