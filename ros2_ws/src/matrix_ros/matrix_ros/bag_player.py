@@ -30,6 +30,7 @@ from rosgraph_msgs.msg import Clock
 
 from matrix_core.bags.clock import read_sequence_clock
 from matrix_core.bags.salvage import BagDamaged, connections, raw_messages
+from matrix_ros.connect import SubscribersReady
 from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
 from matrix_ros.message_types import message_class
 from matrix_ros.params import parse_node_args, declare_settings
@@ -93,15 +94,12 @@ class BagPlayer(Node):
         image_pubs = {t: p for t, p in self.pubs.items() if 'image' in t}
         if s.wait_for_subscribers:
             self.get_logger().info(f'waiting for {s.wait_for_subscribers} subscriber(s) on each image topic')
-            while rclpy.ok():
-                short = {t: p.get_subscription_count() for t, p in image_pubs.items()
-                         if p.get_subscription_count() < s.wait_for_subscribers}
-                if not short:
-                    break
-                self.get_logger().info('still waiting: ' + ', '.join(f'{t} {n}/{s.wait_for_subscribers}'
-                                                                     for t, n in sorted(short.items())),
-                                       throttle_duration_sec=10.0)
-                self._spin_for(0.2)
+            subscribers = SubscribersReady(image_pubs, s.wait_for_subscribers)
+            while rclpy.ok() and not subscribers.ready(time.monotonic()):
+                if short := subscribers.short():
+                    self.get_logger().info('still waiting: ' + ', '.join(f'{t} {n}/{s.wait_for_subscribers}'
+                                           for t, n in sorted(short.items())), throttle_duration_sec=10.0)
+                self._spin_for(0.1)
         if self.lockstep_sub is not None and self.lockstep_sub.get_publisher_count() < 1:
             self.get_logger().info(f'waiting for a publisher on {s.lockstep_topic}')
             self._spin_for(3600, lambda: self.lockstep_sub.get_publisher_count() >= 1)

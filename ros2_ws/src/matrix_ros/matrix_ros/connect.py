@@ -10,10 +10,18 @@ Images without their geometry are of no use to these nodes, so nothing is lost b
 This closes only one side: discovery runs each way separately, so the subscription may see its publisher
 while that publisher does not see the subscription yet, and what it publishes meanwhile still misses it. A
 subscriber that cannot lose a message also asks for transient-local history (fuse: ``geometry_qos``), which
-the workspace's publishers offer (``matrix_ros.qos``).
+the workspace's publishers offer (``matrix_ros.qos``). The same one-sided window exists between a player
+and the image subscriptions it waits for: it counts a subscription as soon as its own writer matched it, while
+the subscriber may not have matched the writer yet and would drop the first frame (seen in 2 of 3 simulated
+lockstep runs of ``bench_graph.py`` at stop 35: frame 0 of one drone never reached fuse). A player therefore
+starts only once the subscriptions have been there for ``SETTLE_S`` (:class:`SubscribersReady`).
 """
 
 from typing import Callable
+
+# Seconds every awaited subscription must stay matched before a player starts: time for the subscriber to
+# match the player's writer too (both directions of discovery usually complete within milliseconds here).
+SETTLE_S = 1.0
 
 from rclpy.clock import Clock, ClockType
 
@@ -48,3 +56,26 @@ class SubscribeWhenConnected:
             self.timer = None
         self.node.get_logger().info(f'{self.name}: {", ".join(s.topic_name for s in self.needs)} connected; '
                                     'images subscribed')
+
+
+class SubscribersReady:
+    """Whether every publisher in ``pubs`` (topic -> publisher) has had ``need`` matched subscriptions for
+    ``settle_s`` seconds without a break (``ready(now)``, ``now`` on a steady clock, seconds); always
+    ready when ``need`` is 0 (nothing awaited)."""
+
+    def __init__(self, pubs: dict, need: int, settle_s: float = SETTLE_S):
+        self.pubs, self.need, self.settle_s, self.since = pubs, need, settle_s, None
+
+    def short(self) -> dict:
+        """topic -> its subscription count, of the topics with fewer than ``need``."""
+        counts = {t: p.get_subscription_count() for t, p in self.pubs.items()}
+        return {t: n for t, n in counts.items() if n < self.need}
+
+    def ready(self, now: float) -> bool:
+        if self.need <= 0:
+            return True
+        if self.short():
+            self.since = None
+            return False
+        self.since = now if self.since is None else self.since
+        return now - self.since >= self.settle_s

@@ -6,6 +6,7 @@ Per view ``V`` (e.g. ``D1``) and frame, with header stamp ``start_time + frame_i
 ``matrix_ros.conversions`` for the ``p = K [R | t]`` convention). Frame ids: ``V/camera_optical``.
 """
 
+import time
 from dataclasses import dataclass, field
 
 from rclpy.node import Node
@@ -15,6 +16,7 @@ from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from matrix_core import topics
 from matrix_core.bags.clock import DEFAULT_CLOCK
 from matrix_core.datasets import DatasetError, open_dataset
+from matrix_ros.connect import SubscribersReady
 from matrix_ros.conversions import camera_to_camera_info, image_to_msg, seconds_to_stamp
 from matrix_ros.params import declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
@@ -57,14 +59,14 @@ class DatasetPlayer(Node):
             self.image_pubs[view] = self.create_publisher(CompressedImage if s.compressed else Image,
                                                           topics.image_topic(view, s.compressed), qos)
             self.info_pubs[view] = self.create_publisher(CameraInfo, topics.camera_info_topic(view), publisher_qos())
+        self.subscribers = SubscribersReady(self.image_pubs, s.wait_for_subscribers)
         self.index = 0
         self.timer = self.create_timer(s.frame_period / s.rate, self._tick)
         self.get_logger().info(f'publishing {len(self.frames)} frames x {len(self.views)} views '
                                f'of {s.dataset} at {1.0 / s.frame_period * s.rate:.2f} Hz')
 
     def _ready(self) -> bool:
-        need = self.settings.wait_for_subscribers
-        return all(p.get_subscription_count() >= need for p in self.image_pubs.values())
+        return self.subscribers.ready(time.monotonic())
 
     def _tick(self):
         if not self._ready():
