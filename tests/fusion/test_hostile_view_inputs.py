@@ -10,7 +10,7 @@ from sensor_msgs.msg import CompressedImage, Image
 from std_msgs.msg import Header
 
 from matrix_core.datasets import MatrixDataset
-from matrix_core.fusion.view_inputs import NOT_SENT, ImageNotSent, ViewInputs
+from matrix_core.fusion.view_inputs import EARLY_KEPT, NOT_SENT, ImageNotSent, ViewInputs
 from matrix_core.register.registration import Registration
 from matrix_ros.conversions import (camera_to_camera_info, image_to_compressed, image_to_msg,
                                     registration_to_msg)
@@ -119,3 +119,34 @@ def test_an_absurdly_scaled_camera_info_is_refused(real):
     msg = _camera_info(camera, p=[1e6 * v for v in msg.p])
     view = _inputs().view_input('D1', image_to_compressed(image), msg, 'camera_info')
     assert not view.usable and 'rotation' in view.reason, view.reason
+
+
+def test_an_image_decoded_on_arrival_gives_the_same_view(real):
+    # the fuse node decodes each image as it arrives (decode_early); the frame's view must not change by it
+    camera, image = real
+    msg, geometry = image_to_compressed(image), _homography(camera)
+    plain, early = _inputs(), _inputs()
+    for inputs in (plain, early):   # a first frame teaches the full size: the next decodes reduced
+        assert inputs.view_input('D1', image_to_compressed(image), geometry, 'homography').usable
+    early.decode_early('D1', msg)
+    assert len(early._early) == 1
+    a, b = plain.view_input('D1', msg, geometry, 'homography'), early.view_input('D1', msg, geometry, 'homography')
+    assert b.usable and not early._early   # taken from the early decode, then forgotten
+    np.testing.assert_array_equal(a.image, b.image)
+    np.testing.assert_allclose(a.img_H_ground, b.img_H_ground)
+    assert a.image.shape[:2] == (540, 960)   # decoded at 1/2 for a 480x272 network input
+
+
+def test_early_decodes_are_bounded_and_a_bad_image_still_says_why(real):
+    camera, image = real
+    inputs, geometry = _inputs(), _homography(camera)
+    bad = image_to_compressed(image)
+    bad.data = bytes(100)
+    inputs.decode_early('D1', bad)   # not decodable: left for view_input, which names the problem
+    view = inputs.view_input('D1', bad, geometry, 'homography')
+    assert not view.usable and view.reason
+    small = image_to_compressed(image[::8, ::8].copy())
+    for _ in range(EARLY_KEPT + 5):   # images of frames never fused (late, superseded) do not pile up
+        inputs.decode_early('D1', image_to_compressed(image[::8, ::8].copy()))
+    inputs.decode_early('D1', small)
+    assert len(inputs._early) == EARLY_KEPT and id(small) in inputs._early

@@ -100,6 +100,8 @@ class FuseNode(Node):
             self.get_logger().warning(f't={stamp:.3f} s is {self.last_fused - stamp:.1f} s before the last fused '
                                       f'frame: time went back, starting fresh')
             self._start_fresh()
+        if part == 'image':   # decoded now, while the drones still work on this frame (ViewInputs.decode_early)
+            self.inputs.decode_early(view, msg)
         frames = self.sync.add(f'{view}/{part}', stamp, msg, now)
         if self.sync.late_items > self.late_reported:
             self.late_reported = self.sync.late_items

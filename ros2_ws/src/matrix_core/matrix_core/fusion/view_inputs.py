@@ -8,6 +8,9 @@ only subscribes and hands the messages over. Geometry:
   the registration failed or is unusable, or its confidence is below ``min_confidence``;
 - ``sensor_msgs/CameraInfo`` (``p = K [R | t]``, from ``calib`` or a bag's ground truth): its camera; an
   image of another size than the CameraInfo's makes the view missing.
+
+Images may be decoded as they arrive (:meth:`ViewInputs.decode_early`), while the drones still register and
+calibrate that frame: the decode then no longer sits between the frame's last homography and its tracks.
 """
 
 from dataclasses import dataclass
@@ -19,6 +22,7 @@ from matrix_core.register.registration import STATUS_FAILED, RegistrationError
 
 
 NOT_SENT = 'no image: dropped at the sender (link budget)'
+EARLY_KEPT = 64   # early decodes kept for frames not fused yet (8 views x 8 frames); the oldest go first
 
 
 @dataclass(frozen=True)
@@ -54,6 +58,19 @@ class ViewInputs:
     def __init__(self, input_size: tuple, min_confidence: float, reduced_decode: bool):
         self.input_size, self.min_confidence, self.reduced_decode = input_size, min_confidence, reduced_decode
         self.full_size = {}   # view -> (w, h) of its last fully decoded image
+        self._early = {}      # id(msg) -> (msg, (image, r)): decoded on arrival, not used yet
+
+    def decode_early(self, view: str, msg) -> None:
+        """Decode ``msg``, one of ``view``'s images, now; :meth:`view_input` takes it from here. A message that
+        does not decode is left for :meth:`view_input`, which says why the view is missing."""
+        if msg is None or isinstance(msg, ImageNotSent):
+            return
+        try:
+            self._early[id(msg)] = (msg, self._decode(view, msg))   # the message kept: its id stays unique
+        except (ViewInputError, ConversionError):
+            return
+        while len(self._early) > EARLY_KEPT:
+            del self._early[next(iter(self._early))]
 
     def frame_views(self, items: dict, views: list, geometry_name: str) -> dict | None:
         """Every view's :class:`ViewInput` from a synchronised frame's items (``'V/image'``, ``'V/geometry'``);
@@ -68,6 +85,7 @@ class ViewInputs:
         geometry in that reason (e.g. 'homography')."""
         if isinstance(image_msg, ImageNotSent):
             return ViewInput(reason=NOT_SENT)
+        early = self._early.pop(id(image_msg), (None, None))[1]
         if image_msg is None or geometry_msg is None:
             return ViewInput(reason='no ' + ' and no '.join(
                 p for p, x in (('image', image_msg), (geometry_name, geometry_msg)) if x is None))
@@ -80,26 +98,27 @@ class ViewInputs:
             else:
                 camera = camera_from_camera_info(geometry_msg)
                 img_H_ground, camera_size = camera.img_H_ground(), (camera.width, camera.height)
-            image, img_H_ground = self._decode(view, image_msg, img_H_ground)
+            image, r = early or self._decode(view, image_msg)
             if camera_size is not None and self.full_size[view] != camera_size:
                 # its homography is for other pixels: lifting would put the features in the wrong cells
                 raise ViewInputError('image is {}x{}, its camera_info is for {}x{}'.format(*self.full_size[view],
                                                                                           *camera_size))
         except (ViewInputError, ConversionError) as exc:
             return ViewInput(reason=str(exc), confidence=confidence)
-        return ViewInput(image, img_H_ground, confidence=confidence)
+        return ViewInput(image, img_H_ground if r == 1 else at_reduced_resolution(img_H_ground, r),
+                         confidence=confidence)
 
-    def _decode(self, view: str, msg, img_H_ground):
-        """The image and its ground homography: a JPEG at the smallest libjpeg scale that keeps the network
-        input, once a full decode told the view's image size."""
+    def _decode(self, view: str, msg) -> tuple:
+        """(image, r): the image decoded at 1/r, a JPEG at the smallest libjpeg scale that keeps the network
+        input once a full decode told the view's image size (r = 1 otherwise)."""
         full = self.full_size.get(view)
         if hasattr(msg, 'format') and self.reduced_decode and full and is_jpeg(msg):
             r = jpeg_reduction(full, self.input_size)
             if r > 1:
                 image = image_from_msg(msg, r)
                 if (image.shape[1], image.shape[0]) == (-(-full[0] // r), -(-full[1] // r)):
-                    return image, at_reduced_resolution(img_H_ground, r)
+                    return image, r
                 # the stream's image size changed: decode in full and learn the new size
         image = image_from_msg(msg)
         self.full_size[view] = (image.shape[1], image.shape[0])
-        return image, img_H_ground
+        return image, 1
