@@ -31,6 +31,7 @@ from matrix_core import topics
 from matrix_core.evaluation.graph_report import write_graph_report
 from matrix_ros.conversions import (ConversionError, camera_info_to_camera, msg_to_image, registration_from_msg,
                                     stamp_to_seconds)
+from matrix_ros.executor import make_executor
 from matrix_ros.params import declare_settings, parse_node_args
 from matrix_ros.qos import publisher_qos, qos_by_name
 
@@ -145,13 +146,15 @@ class GraphMonitor(Node):
 def main(argv=None) -> int:
     cli, argv = parse_node_args(GraphMonitorSettings, argv, __doc__)
     rclpy.init(args=argv)
-    node = GraphMonitor(cli)
+    node, executor = GraphMonitor(cli), make_executor()
+    executor.add_node(node)
     try:
         while rclpy.ok() and not node.done:
-            rclpy.spin_once(node, timeout_sec=0.2)
+            executor.spin_once(timeout_sec=0.2)
     except KeyboardInterrupt:
         node.finish()
     scored = getattr(node, 'scored', 0)
+    executor.shutdown()
     node.destroy_node()
     rclpy.try_shutdown()
     return 0 if scored else 1

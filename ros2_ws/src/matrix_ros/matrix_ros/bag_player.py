@@ -32,6 +32,7 @@ from matrix_core.bags.clock import read_sequence_clock
 from matrix_core.bags.salvage import BagDamaged, connections, raw_messages
 from matrix_ros.connect import SubscribersReady
 from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
+from matrix_ros.executor import make_executor
 from matrix_ros.message_types import message_class
 from matrix_ros.params import parse_node_args, declare_settings
 from matrix_ros.player_settings import BagPlayerSettings
@@ -53,7 +54,8 @@ class BagPlayer(Node):
         self.released = {}  # stamp (s) -> lockstep messages seen
         self.timed_out = []  # stamps whose lockstep release never came
         self.skipped = 0     # frames due (start_at) before the player was ready
-        self.lockstep_sub = None
+        self.lockstep_sub, self.spinner = None, make_executor()
+        self.spinner.add_node(self)
         if s.lockstep:
             self.lockstep_sub = self.create_subscription(message_class(s.lockstep_type), s.lockstep_topic,
                                                          self._on_lockstep, qos_by_name(s.lockstep_qos, 50))
@@ -69,7 +71,7 @@ class BagPlayer(Node):
     def _spin_for(self, seconds: float, until=lambda: False):
         deadline = time.monotonic() + seconds
         while rclpy.ok() and time.monotonic() < deadline and not until():
-            rclpy.spin_once(self, timeout_sec=min(0.05, max(0.0, deadline - time.monotonic())))
+            self.spinner.spin_once(timeout_sec=min(0.05, max(0.0, deadline - time.monotonic())))
 
     def frames(self):
         """Yield (bag time ns, [(topic, raw bytes)]) grouped by identical bag time. A damaged bag ends with
@@ -149,7 +151,7 @@ def main(argv=None) -> int:
     try:
         played = node.play()
         if not node.settings.exit_when_done:
-            rclpy.spin(node)
+            node.spinner.spin()
     except KeyboardInterrupt:
         played = 0
     finally:

@@ -8,13 +8,13 @@ import sys
 import typing
 
 import rclpy
-import rclpy.executors
 from rcl_interfaces.msg import ParameterDescriptor, ParameterType, SetParametersResult
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from matrix_core.settings import add_settings_arguments, settings_fields, settings_from_namespace
+from matrix_ros.executor import make_executor
 
 
 SPIN_TIMEOUT_S = 0.5   # longest wait for work before the stop flag is checked (0.1 s cost an idle node 0.7 % of a core)
@@ -129,7 +129,7 @@ def _spin(node_factories, argv, on_exit=None) -> int:
     stop = []
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.append(True))
-    nodes, executor = [], rclpy.executors.SingleThreadedExecutor()
+    nodes, executor = [], make_executor()
     try:
         for factory in node_factories:
             nodes.append(factory())
