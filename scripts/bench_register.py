@@ -55,11 +55,11 @@ def feature_budget(backend: str, scale: float, kornia_features: int) -> tuple:
 
 
 def bench(dataset, backend, scale, pairs, kornia_features, mode='reference', reanchor_every=10,
-          anchor_by_flow=True, matcher='brute') -> dict:
+          anchor_by_flow=True, matcher='brute', track_min_inliers=40) -> dict:
     current, reference = feature_budget(backend, scale, kornia_features)
     settings = RegisterSettings(backend=backend, scale=scale, max_features=current,
                                 reference_max_features=reference, mode=mode, reanchor_every=reanchor_every,
-                                anchor_by_flow=anchor_by_flow, matcher=matcher)
+                                anchor_by_flow=anchor_by_flow, matcher=matcher, track_min_inliers=track_min_inliers)
     rows, registrars = [], {}
     for view, frame in tqdm(pairs, desc=f'{backend} @ {scale:g}', unit='pair', leave=False):
         if view not in registrars:
@@ -101,7 +101,9 @@ def simulated_acceptance(args) -> int:
                                       width=args.sim_size[0], height=args.sim_size[1]))
         run = acceptance_run(MatrixDataset(folder), RegisterSettings(mode=args.mode, reanchor_every=args.reanchor_every,
                                                                anchor_by_flow=args.anchor_by_flow,
-                                                               matcher=args.matcher), progress=True)
+                                                               matcher=args.matcher,
+                                                               track_min_inliers=args.track_min_inliers),
+                             progress=True)
         cpu = 1000 * np.array(run['cpu_seconds'])
         ok = run['pairs'] - len(run['failed'])
         met = not run['failed'] and run['error_px_median'] <= 0.5 and run['error_px_max'] <= 3.0
@@ -142,6 +144,8 @@ def main(argv=None) -> int:
                         help='mode track: anchors tried by flow to the reference first (true/false)')
     parser.add_argument('--matcher', choices=['flann', 'brute'], default=RegisterSettings().matcher,
                         help='nearest-neighbour search of the feature matching (RegisterSettings.matcher)')
+    parser.add_argument('--track_min_inliers', type=int, default=RegisterSettings().track_min_inliers,
+                        help='mode track: fewer refined inliers doubt the chain (RegisterSettings.track_min_inliers)')
     args = parser.parse_args(argv)
 
     cv2.setNumThreads(1)
@@ -164,7 +168,7 @@ def main(argv=None) -> int:
         for scale in args.scales:
             try:
                 table.append(bench(dataset, backend, scale, pairs, args.kornia_features, args.mode,
-                                   args.reanchor_every, args.anchor_by_flow, args.matcher))
+                                   args.reanchor_every, args.anchor_by_flow, args.matcher, args.track_min_inliers))
             except MissingWeightsError as exc:
                 print(f'{backend}: skipped: {exc}', file=sys.stderr)
                 break
