@@ -42,6 +42,9 @@ from matrix_core.register.settings import RegisterSettings
 from matrix_core.register.weights import MissingWeightsError
 from matrix_core.settings import parse_bool
 
+# The flags that set RegisterSettings fields of the same names in every run (mode, matching, tracking).
+MODE_FLAGS = ('mode', 'reanchor_every', 'anchor_by_flow', 'matcher', 'track_min_inliers')
+
 
 def feature_budget(backend: str, scale: float, kornia_features: int) -> tuple:
     """(max_features, reference_max_features): the defaults at 480x270; larger images get more features
@@ -54,12 +57,16 @@ def feature_budget(backend: str, scale: float, kornia_features: int) -> tuple:
     return 16000, 32000
 
 
-def bench(dataset, backend, scale, pairs, kornia_features, mode='reference', reanchor_every=10,
-          anchor_by_flow=True, matcher='brute', track_min_inliers=40) -> dict:
+def mode_settings(args) -> dict:
+    """The RegisterSettings fields the flags set (mode, matching, tracking), for every run."""
+    return {name: getattr(args, name) for name in MODE_FLAGS}
+
+
+def bench(dataset, backend, scale, pairs, kornia_features, **mode) -> dict:
+    """One backend at one scale over ``pairs``; ``mode``: RegisterSettings fields (:func:`mode_settings`)."""
     current, reference = feature_budget(backend, scale, kornia_features)
     settings = RegisterSettings(backend=backend, scale=scale, max_features=current,
-                                reference_max_features=reference, mode=mode, reanchor_every=reanchor_every,
-                                anchor_by_flow=anchor_by_flow, matcher=matcher, track_min_inliers=track_min_inliers)
+                                reference_max_features=reference, **mode)
     rows, registrars = [], {}
     for view, frame in tqdm(pairs, desc=f'{backend} @ {scale:g}', unit='pair', leave=False):
         if view not in registrars:
@@ -99,11 +106,7 @@ def simulated_acceptance(args) -> int:
         if not (folder / 'matrix_tracker_meta.json').is_file():
             simulate(SimulateSettings(config=variant, frames=args.sim_frames, seed=args.sim_seed, out=str(folder),
                                       width=args.sim_size[0], height=args.sim_size[1]))
-        run = acceptance_run(MatrixDataset(folder), RegisterSettings(mode=args.mode, reanchor_every=args.reanchor_every,
-                                                               anchor_by_flow=args.anchor_by_flow,
-                                                               matcher=args.matcher,
-                                                               track_min_inliers=args.track_min_inliers),
-                             progress=True)
+        run = acceptance_run(MatrixDataset(folder), RegisterSettings(**mode_settings(args)), progress=True)
         cpu = 1000 * np.array(run['cpu_seconds'])
         ok = run['pairs'] - len(run['failed'])
         met = not run['failed'] and run['error_px_median'] <= 0.5 and run['error_px_max'] <= 3.0
@@ -167,8 +170,7 @@ def main(argv=None) -> int:
             pairs = [all_pairs[(i * step + 2 * i) % len(all_pairs)] for i in range(args.kornia_pairs)]
         for scale in args.scales:
             try:
-                table.append(bench(dataset, backend, scale, pairs, args.kornia_features, args.mode,
-                                   args.reanchor_every, args.anchor_by_flow, args.matcher, args.track_min_inliers))
+                table.append(bench(dataset, backend, scale, pairs, args.kornia_features, **mode_settings(args)))
             except MissingWeightsError as exc:
                 print(f'{backend}: skipped: {exc}', file=sys.stderr)
                 break

@@ -155,6 +155,7 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         played = 0
     finally:
+        node.spinner.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
     return 1 if not played else (4 if node.damage else 3 if node.timed_out else 0)
