@@ -121,11 +121,15 @@ def main() -> int:
                         help='mode track: anchors tried by flow to the reference first (RegisterSettings.anchor_by_flow)')
     parser.add_argument('--matcher', choices=['flann', 'brute'], default=defaults.matcher,
                         help='nearest-neighbour search of the feature matching (RegisterSettings.matcher)')
+    parser.add_argument('--anchor_search_margin_px', type=float, default=defaults.anchor_search_margin_px,
+                        help="mode track: a doubted chain's anchor searches the predicted ground grown by this many "
+                        'pixels, 0 = the whole image (RegisterSettings.anchor_search_margin_px)')
     add_settings_arguments(parser, CalibSettings)   # e.g. --track_corners true; the config follows each folder
     args = parser.parse_args()
     calib_settings = settings_from_namespace(CalibSettings, args)
     register_settings = RegisterSettings(mode=args.mode, reanchor_every=args.reanchor_every,
-                                         anchor_by_flow=args.anchor_by_flow, matcher=args.matcher)
+                                         anchor_by_flow=args.anchor_by_flow, matcher=args.matcher,
+                                         anchor_search_margin_px=args.anchor_search_margin_px)
     cv2.setNumThreads(1)
     threadpool_limits(1, user_api='blas')   # as the nodes (NodeSettings.apply_threads)
     import torch

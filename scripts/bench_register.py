@@ -43,7 +43,7 @@ from matrix_core.register.weights import MissingWeightsError
 from matrix_core.settings import parse_bool
 
 # The flags that set RegisterSettings fields of the same names in every run (mode, matching, tracking).
-MODE_FLAGS = ('mode', 'reanchor_every', 'anchor_by_flow', 'matcher', 'track_min_inliers')
+MODE_FLAGS = ('mode', 'reanchor_every', 'anchor_by_flow', 'matcher', 'track_min_inliers', 'anchor_search_margin_px')
 
 
 def feature_budget(backend: str, scale: float, kornia_features: int) -> tuple:
@@ -149,6 +149,9 @@ def main(argv=None) -> int:
                         help='nearest-neighbour search of the feature matching (RegisterSettings.matcher)')
     parser.add_argument('--track_min_inliers', type=int, default=RegisterSettings().track_min_inliers,
                         help='mode track: fewer refined inliers doubt the chain (RegisterSettings.track_min_inliers)')
+    parser.add_argument('--anchor_search_margin_px', type=float, default=RegisterSettings().anchor_search_margin_px,
+                        help="mode track: a doubted chain's anchor searches the predicted ground grown by this "
+                        'many pixels, 0 = the whole image (RegisterSettings.anchor_search_margin_px)')
     args = parser.parse_args(argv)
 
     cv2.setNumThreads(1)

@@ -63,3 +63,20 @@ def test_kornia_substitute_registers_a_real_pair_at_480x270(backend, offline_tor
     assert r.backend == backend
     error = homography_error_px(r.ref_H_img, dataset.camera('D3', 0), ref, dataset.area, settings.exclude_boxes)
     assert error < 1.5, f'{backend}: {error:.2f} px'
+
+
+@pytest.mark.slow
+def test_kornia_mask_keeps_the_features_inside_it(offline_torch_home, matrix_sample):
+    import numpy as np
+    import torch
+
+    torch.set_num_threads(1)
+    image = MatrixDataset(matrix_sample).load_image('D3', 0)
+    backend = make_backend(RegisterSettings(backend='gftt_affnet_sift', scale=0.25))
+    everywhere = backend.extract(image, 2000)
+    mask = np.zeros((270, 480), bool)
+    mask[135:] = True   # the lower half of the 480x270 working image
+    inside = backend.extract(image, 2000, mask)
+    assert 0 < len(inside) < len(everywhere)
+    assert np.all(inside.xy[:, 1] >= (135 - 0.5) / 0.25 - 0.5 - 2)
+    assert len(inside) == int(np.sum(np.round((everywhere.xy[:, 1] + 0.5) * 0.25 - 0.5) >= 135))

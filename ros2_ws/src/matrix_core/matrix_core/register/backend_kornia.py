@@ -11,7 +11,7 @@ AffNet affine shape, LAFOrienter(19)). Descriptors:
 
 import numpy as np
 
-from matrix_core.register.features import Features, resize, to_full_resolution, to_gray
+from matrix_core.register.features import Features, mask_at, resize, to_full_resolution, to_gray
 from matrix_core.register.weights import AFFNET_FILE, load_hardtfeat, require_checkpoint, require_hardnet
 
 
@@ -71,7 +71,9 @@ class GfttAffNetBackend:
                 scale_space_response=False, minima_are_also_good=False, mr_size=6.0).eval()
         return self._detectors[num_features]
 
-    def extract(self, image: np.ndarray, max_features: int) -> Features:
+    def extract(self, image: np.ndarray, max_features: int, mask: np.ndarray = None) -> Features:
+        """See :class:`~matrix_core.register.features.FeatureBackend`; ``mask`` only drops the features
+        outside it (the detector still runs on the whole image)."""
         import torch
 
         gray = resize(to_gray(image), self.scale)
@@ -80,4 +82,9 @@ class GfttAffNetBackend:
             lafs, _ = self._detector(int(max_features))(timg)
             desc = self._descriptor(timg, lafs)
         xy = self._kf.get_laf_center(lafs)[0].numpy().astype(np.float64)
-        return Features(to_full_resolution(xy, self.scale), desc[0].numpy().astype(np.float32))
+        features = Features(to_full_resolution(xy, self.scale), desc[0].numpy().astype(np.float32))
+        if mask is None:
+            return features
+        mask = mask_at(mask, gray.shape)
+        col, row = (np.clip(np.round(xy[:, k]), 0, gray.shape[1 - k] - 1).astype(int) for k in (0, 1))
+        return features.subset(mask[row, col])

@@ -38,8 +38,9 @@ class FeatureBackend(Protocol):
 
     name: str
 
-    def extract(self, image: np.ndarray, max_features: int) -> Features:
-        """Detect and describe at most ``max_features`` features of a (H, W, 3) BGR or (H, W) uint8 image."""
+    def extract(self, image: np.ndarray, max_features: int, mask: np.ndarray = None) -> Features:
+        """Detect and describe at most ``max_features`` features of a (H, W, 3) BGR or (H, W) uint8 image;
+        with ``mask`` ((h, w) bool, any size of the image's aspect) only where it is true."""
 
 
 def to_gray(image: np.ndarray) -> np.ndarray:
@@ -58,6 +59,14 @@ def resize(gray: np.ndarray, scale: float) -> np.ndarray:
     h, w = gray.shape[:2]
     size = (max(1, round(w * scale)), max(1, round(h * scale)))
     return cv2.resize(gray, size, interpolation=cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR)
+
+
+def mask_at(mask: np.ndarray, shape: tuple) -> np.ndarray:
+    """(h, w) bool ``mask`` resized (nearest) to ``shape`` (rows, columns)."""
+    mask = np.asarray(mask, dtype=bool)
+    if mask.shape == tuple(shape):
+        return mask
+    return cv2.resize(mask.astype(np.uint8), (shape[1], shape[0]), interpolation=cv2.INTER_NEAREST).astype(bool)
 
 
 def to_full_resolution(xy_scaled: np.ndarray, scale: float) -> np.ndarray:

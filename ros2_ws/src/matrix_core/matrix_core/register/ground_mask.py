@@ -13,6 +13,7 @@ import numpy as np
 
 from matrix_core.geometry.camera import Camera
 from matrix_core.geometry.occlusion import segments_blocked
+from matrix_core.register.features import to_full_resolution
 
 
 def hidden_ground(camera: Camera, world_xy: np.ndarray, boxes) -> np.ndarray:
@@ -44,6 +45,15 @@ def ground_pixels(camera: Camera, xy: np.ndarray, area, margin_m: float = 0.0, b
                 & (ground[:, 1] >= y0 - margin_m) & (ground[:, 1] <= y1 + margin_m))
     keep[keep] = ~hidden_ground(camera, ground[keep, :2], boxes)
     return keep
+
+
+def ground_mask(camera: Camera, scale: float, area, margin_m: float = 0.0, boxes=()) -> np.ndarray:
+    """(h, w) bool: :func:`ground_pixels` at the pixel centres of ``camera``'s image resized by ``scale``
+    (the size :func:`~matrix_core.register.features.resize` gives)."""
+    w, h = max(1, round(camera.width * scale)), max(1, round(camera.height * scale))
+    u, v = np.meshgrid(np.arange(w), np.arange(h))
+    xy = to_full_resolution(np.column_stack([u.ravel(), v.ravel()]), scale)
+    return ground_pixels(camera, xy, area, margin_m, boxes).reshape(h, w)
 
 
 def visible_ground_grid(camera: Camera, area, step_m: float = 0.5, boxes=(), margin_px: float = 0.0) -> np.ndarray:

@@ -8,6 +8,8 @@ Mode ``track`` (:mod:`matrix_core.register.flow_tracking`): frames between ancho
 flow from the previous frame, refined against the anchor and chained to the anchor's registration; an anchor is a
 full registration as above, made on the first frame, every ``reanchor_every`` frames, after a failure, and
 whenever the chain is doubted (too few flow inliers, or the sanity gate rejects the chained homography).
+The anchor after a doubted chain describes features only where the chain's own estimate puts the reference's
+ground (:mod:`matrix_core.register.search_region`), and the whole image only when that fails.
 With ``anchor_by_flow`` an anchor is first tried against the reference image itself by the same flow and
 refinement (the reference is then the anchor of a one-frame chain), which costs a tracked frame instead of
 a feature extraction and matching; the features run only when that fails."""
@@ -24,8 +26,10 @@ from matrix_core.register.features import Features
 from matrix_core.register.fit import fit_homography
 from matrix_core.register.flow_tracking import FlowTracker, TrackState, registered_camera
 from matrix_core.register.gate import check_registration
+from matrix_core.register.ground_mask import ground_mask
 from matrix_core.register.matching import match_symmetric
 from matrix_core.register.reference import Reference
+from matrix_core.register.search_region import predicted_region
 from matrix_core.register.registration import STATUS_FAILED, STATUS_OK, Registration
 from matrix_core.register.settings import RegisterSettings
 
@@ -69,6 +73,11 @@ class Registrar:
         # mode track, anchor_by_flow: the reference as a chain's anchor (its reduced image and ground corners)
         self._reference_track = None
         self._flow_anchor_failures = 0  # anchors by flow that did not hold in a row
+        # mode track: the reference's ground at the features' scale, where a doubted chain's anchor searches
+        self._reference_ground = None
+        if s.mode == 'track' and s.ground_only and s.anchor_search_margin_px > 0:
+            self._reference_ground = ground_mask(reference_camera, s.scale, area, s.ground_margin_m,
+                                                 s.exclude_boxes)
         if s.mode == 'track' and s.anchor_by_flow:
             self._reference_track = self.tracker.anchor(
                 self.tracker.reduce(reference_image), reference_camera, np.eye(3), reference_id,
@@ -99,28 +108,43 @@ class Registrar:
         gray = self.tracker.reduce(image)
         state, every = self._track, self.settings.reanchor_every
         due = bool(state is not None and every and state.steps + 1 >= every)
-        tracked, why = self._flow(gray, start)
+        tracked, why, predicted = self._flow(gray, start)
         if tracked is not None:
             return tracked
         anchored, why_not = self._anchor_by_flow(gray, frame_id, start, due)
         if anchored is not None:
             return replace(anchored, message=f'anchor by flow to the reference: {why}')
         why = f'{why}; by flow to the reference: {why_not}' if why_not else why
-        result = self._register_full(image, frame_id, start)
+        result = self._register_full(image, frame_id, start, self._search_region(predicted))
         self._anchor(gray, result, frame_id)
         return replace(result, message='; '.join(filter(None, [f'anchor: {why}', result.message])),
                        seconds=time.perf_counter() - start)
 
-    def _register_full(self, image: np.ndarray, frame_id, start) -> Registration:
-        """Features of ``image`` (full-size BGR or grey) matched to the reference or key frame."""
+    def _search_region(self, ref_H_cur) -> np.ndarray:
+        """(h, w) bool where the current image can show the reference's ground by the prediction ``ref_H_cur``
+        (None: no prediction, re-keyed or masking off: the whole image)."""
+        if ref_H_cur is None or self._reference_ground is None or self.key is not None:
+            return None
+        return predicted_region(self._reference_ground, ref_H_cur, self.settings.scale,
+                                self.settings.anchor_search_margin_px)
+
+    def _register_full(self, image: np.ndarray, frame_id, start, region: np.ndarray = None) -> Registration:
+        """Features of ``image`` (full-size BGR or grey) matched to the reference or key frame; only within
+        ``region`` ((h, w) bool, :meth:`_search_region`) first when given, the whole image if that fails."""
         s = self.settings
-        cur = self.backend.extract(image, s.max_features)
+        cur = self.backend.extract(image, s.max_features, region)
         notes = []
         result = None
         if self.key is not None and self._retry_due():
             result = self._back_to_reference(cur, start, notes)
         if result is None:
             result = self._attempt(cur, *self._target(), start)
+            if region is not None and result.ok:
+                notes.append('features within the predicted ground')
+            elif region is not None:   # the prediction may have been wrong: the whole image
+                notes.append(f'not registered within the predicted ground ({result.message}), the whole image')
+                cur = self.backend.extract(image, s.max_features)
+                result = self._attempt(cur, *self._target(), start)
             if self.key is not None and s.retry_reference_every and self._weak(result) and not notes:
                 # The chained registration degrades: the original reference may be visible again.
                 result = self._back_to_reference(cur, start, notes) or result
@@ -134,33 +158,36 @@ class Registrar:
         return replace(result, seconds=time.perf_counter() - start)
 
     def _flow(self, gray: np.ndarray, start) -> tuple:
-        """(tracked Registration, '') when the flow from the previous frame holds, else (None, why it
-        does not: the reason of the anchor that follows)."""
+        """(tracked Registration, '', None) when the flow from the previous frame holds, else (None, why it
+        does not: the reason of the anchor that follows, the chain's (3, 3) estimate of ``ref_H_cur`` if it
+        made one the gate accepts, else None)."""
         s, state = self.settings, self._track
         if state is None:
-            return None, 'no registered previous frame'
+            return None, 'no registered previous frame', None
         if s.reanchor_every and state.steps + 1 >= s.reanchor_every:
-            return None, f'due (every {s.reanchor_every} frames)'
+            return None, f'due (every {s.reanchor_every} frames)', None
         step = self.tracker.step(state, gray)
-        if step.anchor_H_cur is None:
-            return None, f'chain doubted: {step.reason}'
-        if step.inliers < s.track_min_inliers:
-            return None, f'chain doubted: {step.inliers} flow inliers (track_min_inliers {s.track_min_inliers})'
         anchor = state.anchor
+        if step.anchor_H_cur is None:   # the flow step alone, chained to the previous frame, still predicts
+            predicted = None if step.prev_H_cur is None else \
+                anchor.ref_H_img @ state.anchor_H_img @ step.prev_H_cur
+            return None, f'chain doubted: {step.reason}', predicted
         H = anchor.ref_H_img @ step.anchor_H_cur
         H = H / H[2, 2]
+        if step.inliers < s.track_min_inliers:
+            return None, f'chain doubted: {step.inliers} flow inliers (track_min_inliers {s.track_min_inliers})', H
         cam = self.reference.camera
         reason, implied = check_registration(
             H, cam.K, cam.img_H_ground(), cam.center, self.reference.polygon, self._previous_center,
             self._frames_since_good, s.gate_max_shape_error, s.gate_max_area_ratio, s.gate_max_height_change_m,
             s.gate_max_step_m, anchor.inliers, s.gate_shape_inliers)
         if reason:
-            return None, f'chain doubted: {reason}'
+            return None, f'chain doubted: {reason}', None
         self._previous_center, self._frames_since_good = implied.center, 1
         steps = state.steps + 1
         self._track = TrackState(anchor, gray, step.corners, step.anchor_H_cur, steps, step.prev_H_cur)
         return self._result(STATUS_OK, H, step.tracked, step.inliers, step.error_px, start,
-                            f'tracked: {steps} frame(s) after its anchor', anchor.chain, implied), ''
+                            f'tracked: {steps} frame(s) after its anchor', anchor.chain, implied), '', None
 
     def _anchor_by_flow(self, gray: np.ndarray, frame_id, start, due: bool) -> tuple:
         """(Registration, '') of ``gray`` refined against the reference's own ground corners, which starts a new

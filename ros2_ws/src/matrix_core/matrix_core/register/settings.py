@@ -85,6 +85,10 @@ class RegisterSettings:
     track_min_inliers: int = field(default=40, metadata={
         'help': 'mode track: a frame whose refinement against the anchor has fewer inliers doubts the chain '
                 '(a full registration follows)'})
+    anchor_search_margin_px: float = field(default=40.0, metadata={
+        'help': "mode track: the anchor that follows a doubted chain describes features only where the chain's "
+                "prediction puts the reference's ground, grown by this many full-resolution pixels (the whole "
+                'image when that fails; 0 = always the whole image; register/search_region.py)'})
     seed: int = field(default=0, metadata={
         'help': 'random seed of the ransac estimator: the same seed repeats its homographies, other seeds '
                 'draw other samples (magsac is deterministic and ignores it)'})
@@ -114,5 +118,7 @@ class RegisterSettings:
                      'track_min_inliers'):
             if getattr(self, name) < 4:
                 raise ValueError(f'{name} must be at least 4')
+        if self.anchor_search_margin_px < 0:
+            raise ValueError(f'anchor_search_margin_px must be >= 0, got {self.anchor_search_margin_px}')
         if self.ransac_threshold_px <= 0 or self.gate_max_area_ratio <= 1.0:
             raise ValueError('ransac_threshold_px must be > 0 and gate_max_area_ratio > 1')
