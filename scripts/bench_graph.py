@@ -146,6 +146,7 @@ def run_once(settings: GraphSettings, facts: BagFacts, run: Path, drain_s: float
                'incomplete': sum(1 for s in stamps if probe.views_used.get(s, len(settings.views)) < len(settings.views)),
                'crashed': crashed, 'raw_topics': sorted(probe.raw_topics),
                'timed_out': 'lockstep: only' in graph.log_path(specs[-1]).read_text()}
+    print('LAT', np.round(lat, 2).tolist(), flush=True)
     if len(lat) and cpu_start and cpu_end:
         figures['rate'] = len(lat) / (max(probe.tracks.values()) - min(probe.first_image.values()))
         figures['latency_median'], figures['latency_p95'] = np.median(lat), np.percentile(lat, 95)
