@@ -51,6 +51,21 @@ def test_a_person_hidden_by_a_nearer_one_is_marked_occluded():
     assert (near.track_id, near.occluded, far.track_id, far.occluded) == (2, False, 1, True)
 
 
+def test_occlusion_in_a_crowd_is_that_of_the_exact_union():
+    # image_boxes computes the union only for boxes whose overlaps with nearer ones add up past the threshold
+    rng = np.random.default_rng(3)
+    flagged = 0
+    for _ in range(20):
+        n = int(rng.integers(5, 80))
+        xy = np.column_stack([rng.uniform(5, 30, n), rng.uniform(-8, 8, n)])
+        found = image_boxes(CAMERA, np.arange(n), xy, np.ones(n), NO_OBSTACLES)
+        boxes = np.array([b.box for b in found])
+        exact = [covered_fraction(b, boxes[:k]) > NO_OBSTACLES.person_occlusion for k, b in enumerate(boxes)]
+        assert [b.occluded for b in found] == exact
+        flagged += sum(exact)
+    assert flagged > 20   # the crowds do hide people
+
+
 def test_covered_fraction_of_the_union():
     assert covered_fraction(np.array([0, 0, 10, 10.0]), [[0, 0, 5, 10], [3, 0, 8, 5]]) == pytest.approx(0.65)
 

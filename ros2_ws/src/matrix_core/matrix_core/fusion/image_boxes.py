@@ -169,9 +169,17 @@ def image_boxes(camera: Camera, track_ids, xy, scores, settings: ImageBoxSetting
     dist = np.linalg.norm(foot[idx] - camera.center, axis=1)
     order = np.argsort(dist, kind='stable')
     ids, sc = np.asarray(track_ids).reshape(-1), np.asarray(scores, dtype=np.float64).reshape(-1)
+    # The union of the nearer boxes covers at most the sum of their overlaps: only boxes whose sum passes the
+    # threshold need the exact union (most boxes in a crowd overlap little).
+    near = boxes[order]
+    overlap = (np.clip(np.minimum(near[:, None, 2], near[None, :, 2]) - np.maximum(near[:, None, 0], near[None, :, 0]),
+                       0, None)
+               * np.clip(np.minimum(near[:, None, 3], near[None, :, 3]) - np.maximum(near[:, None, 1], near[None, :, 1]),
+                         0, None))
+    maybe = np.tril(overlap, -1).sum(axis=1) > s.person_occlusion * box_area(near)
     out = []
     for rank, k in enumerate(order):
-        occluded = covered_fraction(boxes[k], boxes[order[:rank]]) > s.person_occlusion
+        occluded = maybe[rank] and covered_fraction(boxes[k], boxes[order[:rank]]) > s.person_occlusion
         out.append(ImageBox(int(ids[idx[k]]), float(sc[idx[k]]), boxes[k], float(dist[k]), bool(occluded)))
     return out
 
