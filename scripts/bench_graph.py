@@ -54,6 +54,7 @@ from matrix_ros.qos import qos_by_name
 
 ROOT = Path(__file__).resolve().parent.parent
 RAW_IMAGE = 'sensor_msgs/msg/Image'
+SHOW_FRAMES = 10   # sequences up to this long print every frame's latency
 
 
 def simulated_sequence(out: Path, frames: int, seed: int = 11, size: tuple = (1920, 1080)) -> tuple:
@@ -146,10 +147,10 @@ def run_once(settings: GraphSettings, facts: BagFacts, run: Path, drain_s: float
                'incomplete': sum(1 for s in stamps if probe.views_used.get(s, len(settings.views)) < len(settings.views)),
                'crashed': crashed, 'raw_topics': sorted(probe.raw_topics),
                'timed_out': 'lockstep: only' in graph.log_path(specs[-1]).read_text()}
-    print('LAT', np.round(lat, 2).tolist(), flush=True)
     if len(lat) and cpu_start and cpu_end:
         figures['rate'] = len(lat) / (max(probe.tracks.values()) - min(probe.first_image.values()))
         figures['latency_median'], figures['latency_p95'] = np.median(lat), np.percentile(lat, 95)
+        figures['latencies'] = lat.tolist()
         stages = {}
         for label, end in cpu_end.items():
             stages[stage_of(label)] = stages.get(stage_of(label), 0.0) + (end - cpu_start.get(label, 0.0)) / len(lat)
@@ -201,6 +202,9 @@ def report(name: str, runs: list, views: int) -> int:
           + f'; all {total:.2f} -> at most {os.cpu_count() / total:.2f} frames/s on {os.cpu_count()} cores'
           + (f'; per drone {(cpu.get("drone", 0) + cpu.get("calib", 0) + cpu.get("register", 0)) / views:.3f}'
              if total else ''))
+    short = [r['latencies'] for r in runs if 0 < len(r.get('latencies', ())) <= SHOW_FRAMES]
+    if short:   # a short sequence: where its latency comes from (the first frame costs the most)
+        print('   latency per frame (s), each run: ' + '; '.join(' '.join(f'{x:.2f}' for x in lat) for lat in short))
     raw = sorted({t for r in runs for t in r['raw_topics']})
     print(f'   raw images on DDS: {", ".join(raw) if raw else "none"}')
     bad = [r for r in runs if is_bad(r)]
