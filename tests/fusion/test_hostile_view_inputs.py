@@ -11,7 +11,6 @@ from std_msgs.msg import Header
 
 from matrix_core.datasets import MatrixDataset
 from matrix_core.fusion.view_inputs import EARLY_KEPT, NOT_SENT, ImageNotSent, ViewInputs
-from matrix_core.message_fields import jpeg_size
 from matrix_core.register.registration import Registration
 from matrix_ros.conversions import (camera_to_camera_info, image_to_compressed, image_to_msg,
                                     registration_to_msg)
@@ -151,20 +150,3 @@ def test_early_decodes_are_bounded_and_a_bad_image_still_says_why(real):
         inputs.decode_early('D1', image_to_compressed(image[::8, ::8].copy()))
     inputs.decode_early('D1', small)
     assert len(inputs._early) == EARLY_KEPT and id(small) in inputs._early
-
-
-def test_the_first_jpeg_of_a_view_is_decoded_reduced_by_its_header_size(real):
-    # no full decode (and resize) of every view's first frame: the first frame's latency
-    camera, image = real
-    inputs, msg = _inputs(), image_to_compressed(image)
-    assert jpeg_size(msg) == (1920, 1080)
-    view = inputs.view_input('D1', msg, _camera_info(camera), 'camera_info')
-    assert view.usable and view.image.shape[:2] == (540, 960), view.reason
-    assert inputs.full_size['D1'] == (1920, 1080)
-    # the stream's image size changes: the reduced decode does not match the size known, a full decode follows
-    half = image_to_compressed(image[:540, :960].copy())
-    view = inputs.view_input('D1', half, _homography(camera), 'homography')
-    assert inputs.full_size['D1'] == (960, 540) and view.image.shape[:2] == (540, 960)
-    # not a JPEG, or no frame header: no size
-    assert jpeg_size(CompressedImage(format='jpeg', data=bytes(100))) is None
-    assert jpeg_size(CompressedImage(format='jpeg', data=b'\xff\xd8\xff\xda' + bytes(20))) is None

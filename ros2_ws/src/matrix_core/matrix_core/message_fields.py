@@ -77,37 +77,6 @@ def is_jpeg(msg) -> bool:
     return 'jpeg' in fmt or 'jpg' in fmt or bytes(_bytes(msg.data[:2])) == b'\xff\xd8'
 
 
-# Start-of-frame markers (SOF0-SOF15 but DHT C4, JPG C8, DAC CC): the frame header with the image size.
-_JPEG_SOF = {0xC0, 0xC1, 0xC2, 0xC3, 0xC5, 0xC6, 0xC7, 0xC9, 0xCA, 0xCB, 0xCD, 0xCE, 0xCF}
-_JPEG_HEADER_BYTES = 65536   # where a frame header is looked for (EXIF or ICC segments rarely reach further)
-
-
-def jpeg_size(msg):
-    """(w, h) a JPEG CompressedImage states in its frame header, read without decoding (the segment lengths
-    are followed to the SOF marker); None when no frame header comes before the scan or within the first
-    ``_JPEG_HEADER_BYTES``, or the data is not a JPEG."""
-    data = bytes(_bytes(msg.data[:_JPEG_HEADER_BYTES]))
-    if data[:2] != b'\xff\xd8':
-        return None
-    i = 2
-    while i + 9 <= len(data):
-        if data[i] != 0xFF:
-            return None
-        marker = data[i + 1]
-        if marker == 0xFF:            # fill byte
-            i += 1
-        elif marker in _JPEG_SOF:     # FF Cn, length (2), precision (1), height (2), width (2)
-            h, w = int.from_bytes(data[i + 5:i + 7], 'big'), int.from_bytes(data[i + 7:i + 9], 'big')
-            return (w, h) if w and h else None
-        elif marker in (0xDA, 0xD9):  # start of scan or end of image before any frame header
-            return None
-        elif marker == 0x01 or 0xD0 <= marker <= 0xD7:   # markers without a length
-            i += 2
-        else:
-            i += 2 + int.from_bytes(data[i + 2:i + 4], 'big')
-    return None
-
-
 def compressed_fields(image: np.ndarray, fmt: str = 'jpeg', quality: int = 95) -> dict:
     """(H, W, 3) BGR uint8 -> sensor_msgs/CompressedImage fields (``format``, ``data`` as bytes)."""
     ext, params = ('.jpg', [cv2.IMWRITE_JPEG_QUALITY, quality]) if fmt == 'jpeg' else ('.png', [])

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from matrix_core.fusion.views import ViewInput, ViewInputError, at_reduced_resolution, jpeg_reduction
 from matrix_core.message_fields import (ConversionError, camera_from_camera_info, image_from_msg, is_jpeg,
-                                        jpeg_size, registration_from_msg)
+                                        registration_from_msg)
 from matrix_core.register.registration import STATUS_FAILED, RegistrationError
 
 
@@ -52,7 +52,7 @@ class ViewInputs:
         input_size: (w, h) of the network input.
         min_confidence: registrations below it are not used.
         reduced_decode: decode JPEGs directly at 1/2, 1/4 or 1/8 size when that still covers ``input_size``
-            (the view's image size read from the first JPEG's header, then from the last decode).
+            (once a full decode told the view's image size).
     """
 
     def __init__(self, input_size: tuple, min_confidence: float, reduced_decode: bool):
@@ -110,17 +110,13 @@ class ViewInputs:
 
     def _decode(self, view: str, msg) -> tuple:
         """(image, r): the image decoded at 1/r, a JPEG at the smallest libjpeg scale that keeps the network
-        input, by the view's image size (r = 1 otherwise). The first JPEG's size comes from its header: a full
-        decode and resize of every view's first frame would add to the first frame's latency."""
-        full = None
-        if hasattr(msg, 'format') and self.reduced_decode and is_jpeg(msg):
-            full = self.full_size.get(view) or jpeg_size(msg)
-        if full:
+        input once a full decode told the view's image size (r = 1 otherwise)."""
+        full = self.full_size.get(view)
+        if hasattr(msg, 'format') and self.reduced_decode and full and is_jpeg(msg):
             r = jpeg_reduction(full, self.input_size)
             if r > 1:
                 image = image_from_msg(msg, r)
                 if (image.shape[1], image.shape[0]) == (-(-full[0] // r), -(-full[1] // r)):
-                    self.full_size[view] = full
                     return image, r
                 # the stream's image size changed: decode in full and learn the new size
         image = image_from_msg(msg)
