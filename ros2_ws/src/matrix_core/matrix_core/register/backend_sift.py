@@ -11,6 +11,10 @@ from matrix_core.register.features import Features, mask_at, resize, to_full_res
 CROP_BORDER = 16
 
 
+def _no_features() -> Features:
+    return Features(np.zeros((0, 2)), np.zeros((0, 128), np.float32))
+
+
 class SiftBackend:
     """OpenCV SIFT on an image resized by ``scale``; RootSIFT-free plain descriptors (L2 matching).
 
@@ -32,13 +36,13 @@ class SiftBackend:
             mask = mask_at(mask, gray.shape)
             rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
             if not len(rows):
-                return Features(np.zeros((0, 2)), np.zeros((0, 128), np.float32))
+                return _no_features()
             y0, y1 = max(rows[0] - CROP_BORDER, 0), min(rows[-1] + 1 + CROP_BORDER, gray.shape[0])
             x0, x1 = max(cols[0] - CROP_BORDER, 0), min(cols[-1] + 1 + CROP_BORDER, gray.shape[1])
             gray, mask = gray[y0:y1, x0:x1], mask[y0:y1, x0:x1].astype(np.uint8)
         kps, desc = sift.detectAndCompute(gray, mask)
         if desc is None or not kps:
-            return Features(np.zeros((0, 2)), np.zeros((0, 128), np.float32))
+            return _no_features()
         xy = np.array([k.pt for k in kps], dtype=np.float64) + (x0, y0)
         # OpenCV keypoints are pixel-centre coordinates of the resized image.
         return Features(to_full_resolution(xy, self.scale), desc.astype(np.float32))

@@ -159,8 +159,9 @@ class Registrar:
 
     def _flow(self, gray: np.ndarray, start) -> tuple:
         """(tracked Registration, '', None) when the flow from the previous frame holds, else (None, why it
-        does not: the reason of the anchor that follows, the chain's (3, 3) estimate of ``ref_H_cur`` if it
-        made one the gate accepts, else None)."""
+        does not: the reason of the anchor that follows, the chain's (3, 3) estimate of ``ref_H_cur``: the
+        refined fit with too few inliers, or the flow step alone; None when there is none or the gate
+        rejected it)."""
         s, state = self.settings, self._track
         if state is None:
             return None, 'no registered previous frame', None
