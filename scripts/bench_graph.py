@@ -223,6 +223,8 @@ def main() -> int:
     p.add_argument('--hz', type=float, default=2.0, help='frame rate of the realtime mode')
     p.add_argument('--separate', action='store_true', help='separate calib and register processes (drone_process off)')
     p.add_argument('--drones_per_process', type=int, default=1, help='1 = one process (or two: --separate) per drone')
+    p.add_argument('--drone_niceness', type=int, default=GraphSettings().drone_niceness,
+                   help='niceness of the drone processes (GraphSettings.drone_niceness; 0 = that of fuse)')
     p.add_argument('--dds_profile', default='', help="Fast DDS profile XML for every process ('' = the environment's, "
                    "none = Fast DDS's own defaults)")
     p.add_argument('--register_params', default='', help="register's ROS parameter file (default: matrix_register/"
@@ -261,7 +263,7 @@ def main() -> int:
                     monitor_out=str(out / 'run' / 'monitor'), record=str(out / 'run' / 'recording'),
                     lockstep=mode == 'lockstep', lockstep_timeout=args.lockstep_timeout, rate=period * args.hz,
                     dds_profile=args.dds_profile, register_params=args.register_params,
-                    fuse_params=args.fuse_params)
+                    fuse_params=args.fuse_params, drone_niceness=args.drone_niceness)
                 facts = BagFacts.read(settings.bag, settings.views)
                 label = mode if mode == 'lockstep' else f'realtime {args.hz:g} Hz'
                 runs = []

@@ -83,6 +83,21 @@ def test_drones_split_over_processes(settings):
     assert drones[1].ros_args()[:5] == ['--ros-args', '-r', 'calib:__node:=calib_2', '-r', 'register:__node:=register_2']
 
 
+def test_drone_processes_yield_to_fuse(settings):
+    """On one computer the drone stage runs niced, so that the next frame's registrations wait for this frame's
+    fusion: `nice -n N` before the executable (it execs it: the same process id, signals reach the node)."""
+    for drone_process in (True, False):
+        nodes = graph_nodes(settings(record='/out/rec', monitor=True, drone_process=drone_process), FACTS)
+        drones = [n for n in nodes if n.executable in ('drone', 'calib', 'register')]
+        assert len(drones) == (8 if drone_process else 16)
+        assert all(n.prefix == ['nice', '-n', '10'] for n in drones)
+        assert all(n.prefix == [] for n in nodes if n not in drones)   # fuse, recorder, monitor, player
+    assert all(not n.prefix for n in graph_nodes(settings(drone_niceness=0), FACTS))
+    for bad in (-1, 20):
+        with pytest.raises(ValueError, match='drone_niceness'):
+            settings(drone_niceness=bad)
+
+
 def test_monitor_paces_lockstep_on_every_stage(settings):
     nodes = graph_nodes(settings(drones_per_process=0, monitor=True, views=['D1', 'D5']),
                         BagFacts(compressed=False, frames=7, has_ground_truth=True))
@@ -152,6 +167,9 @@ def test_launch_file_starts_the_graph_nodes(tmp_path):
         [(n.package, n.executable, n.name if n.renamed else Node.UNSPECIFIED_NODE_NAME, n.namespace, n.remaps)
          for n in expected]
     assert [n.executable for n in launched][:2] == ['drone', 'drone']   # the default: a drone process per drone
+    # the drone processes start through `nice` (GraphSettings.drone_niceness), the others as they are
+    assert [n.prefix for n in launched] == [' '.join(n.prefix) for n in expected]
+    assert launched[0].prefix == 'nice -n 10' and launched[-1].prefix == ''
     assert [n.parameters for n in launched] == [[*n.param_files, n.parameters] for n in expected]
     calib = launched[0].parameters[-1]
     assert calib['config'].endswith('sim_simple.yaml') and calib['compressed'] is False   # from the dataset and bag

@@ -40,6 +40,7 @@ class LaunchedNode:
     namespace: str   # '' when none
     parameters: list
     remappings: dict   # '-r' rules: source -> destination
+    prefix: str        # command words before the executable ('' when none), e.g. 'nice -n 10'
 
 
 def launch(description, **arguments) -> list:
@@ -63,4 +64,5 @@ def _launched(node: Node, context) -> LaunchedNode:
                         '' if namespace == Node.UNSPECIFIED_NODE_NAMESPACE.strip('/') else namespace,
                         [str(p) if isinstance(p, Path) else {k: list(v) if isinstance(v, tuple) else v
                                                              for k, v in p.items()} for p in parameters],
-                        dict(node.expanded_remapping_rules or []))
+                        dict(node.expanded_remapping_rules or []),
+                        perform_substitutions(context, node.process_description.prefix or []))

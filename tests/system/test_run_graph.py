@@ -33,6 +33,8 @@ def test_whole_graph_on_the_real_sample(matrix_sample, node_executable, tmp_path
     assert sorted(node_logs) == sorted(['D1_drone.log', 'D5_drone.log',   # each drone's calib + register
                                         'fuse.log', 'recorder.log', 'graph_monitor.log', 'bag_player.log'])
     assert 'played 5 frames' in node_logs['bag_player.log'] and 'lockstep: only' not in node_logs['bag_player.log']
+    # each log starts with its command: the drone processes niced (GraphSettings.drone_niceness), fuse not
+    assert node_logs['D1_drone.log'].startswith('nice -n 10 ') and node_logs['fuse.log'].startswith('/')
     assert not any('Traceback' in text for text in node_logs.values())
     leftovers = {pid: cmd for pid, cmd in _node_processes().items() if pid not in before}
     assert not leftovers, leftovers

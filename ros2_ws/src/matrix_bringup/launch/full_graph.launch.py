@@ -37,6 +37,7 @@ def _graph(context):
     nodes = {spec.label: Node(package=spec.package, executable=spec.executable,
                               name=spec.name if spec.renamed else None, namespace=spec.namespace or None,
                               remappings=list(spec.remaps.items()) or None, output='screen',
+                              prefix=' '.join(spec.prefix) or None,
                               parameters=[*spec.param_files, spec.parameters]) for spec in specs}
     if IfCondition(LaunchConfiguration('exit_at_end')).evaluate(context):
         monitor = next((s.label for s in specs if s.executable == 'graph_monitor'), None)

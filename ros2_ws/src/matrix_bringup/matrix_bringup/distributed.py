@@ -20,7 +20,7 @@ from pathlib import Path
 from matrix_bringup.deployment import GROUND, Deployment
 from matrix_bringup.graph import share_file
 from matrix_bringup.netns_harness import Hosts, address
-from matrix_bringup.run_graph import executable_path
+from matrix_bringup.run_graph import command
 
 SERVER_PORT = 11811   # of the discovery server (config/fastdds_server.xml, fastdds_client.xml)
 # name -> (profile under share/matrix_bringup/config, ROS_AUTOMATIC_DISCOVERY_RANGE, other variables)
@@ -78,7 +78,7 @@ def start(d: Deployment, hosts: Hosts, log_dir: Path, discovery: str = 'multicas
             if spec.executable == 'bag_player':
                 players.append((host, spec))
             else:
-                run(host, spec.label, [executable_path(spec.package, spec.executable), *spec.ros_args()])
+                run(host, spec.label, command(spec))
     _wait_connected(procs, log_path(log_dir, 'fuse'), len(d.drones), timeout_s)
     start_at = time.time() + player_lead_s
     for host, spec in players:
@@ -86,7 +86,7 @@ def start(d: Deployment, hosts: Hosts, log_dir: Path, discovery: str = 'multicas
         params = {**spec.parameters, 'start_at': start_at,
                   'wait_for_subscribers': spec.parameters['wait_for_subscribers'] + extra}
         spec = replace(spec, parameters=params)
-        run(host, spec.label, [executable_path(spec.package, spec.executable), *spec.ros_args()])
+        run(host, spec.label, command(spec))
     return procs
 
 
@@ -95,7 +95,7 @@ def restart(d: Deployment, hosts: Hosts, log_dir: Path, label: str, discovery: s
     ``log_dir/<label>_restarted.log``."""
     host = d.host_of(label)
     spec = next(n for n in d.hosts[host] if n.label == label)
-    return hosts.start(host, [executable_path(spec.package, spec.executable), *spec.ros_args()],
+    return hosts.start(host, command(spec),
                        log_path(log_dir, f'{label}_restarted'), host_env(discovery))
 
 

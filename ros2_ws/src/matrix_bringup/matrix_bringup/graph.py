@@ -16,7 +16,8 @@ process; same nodes, topics and parameters.
 
 Lockstep: the player releases the next frame when the fuse node published tracks for the last one, or,
 with ``monitor``, when the monitor saw every stage (calib, register and tracks) finish it, so that no node
-falls behind the replay.
+falls behind the replay. The drone processes start niced (``drone_niceness``): on one computer fuse, the
+last stage, finishes a frame before the next frame's registrations take the cores.
 """
 
 import logging
@@ -90,6 +91,10 @@ class GraphSettings:
         'help': "also run graph_monitor: scores calib and register against the bag's ground truth and paces "
                 'lockstep on every stage (needs ground_truth/camera_info in the bag)'})
     monitor_out: str = field(default='out/graph_monitor', metadata={'help': "graph_monitor's table and picture"})
+    drone_niceness: int = field(default=10, metadata={
+        'help': 'niceness (0-19) of the drone processes (calib, register): on one computer a frame in fuse is '
+                "not held up by the next frame's registrations, which wait instead (the latency at 2 Hz); "
+                '0 = the same priority as fuse'})
     dds_profile: str = field(default='', metadata={
         'help': 'Fast DDS profile XML for every node, e.g. share/matrix_bringup/config/fastdds.xml (large images '
                 "in shared memory, 0.1 s heartbeat); empty: the environment's FASTRTPS_DEFAULT_PROFILES_FILE"})
@@ -101,6 +106,8 @@ class GraphSettings:
             raise ValueError('views must name at least one drone')
         if self.drones_per_process < 0:
             raise ValueError('drones_per_process must be >= 0')
+        if not 0 <= self.drone_niceness <= 19:
+            raise ValueError(f'drone_niceness must be in [0, 19], got {self.drone_niceness}')
         if self.sync_timeout <= 0 or self.lockstep_timeout <= 0 or self.rate <= 0:
             raise ValueError('sync_timeout, lockstep_timeout and rate must be positive')
 
@@ -111,7 +118,8 @@ class NodeSpec:
 
     ``param_files`` are ROS parameter YAML files applied first; ``parameters`` override them. A process of
     several nodes (``drone``) keeps their own names (``renamed`` false: ``__node`` would rename them all) and
-    takes ``remaps``, e.g. ``{'calib:__node': 'calib_2'}`` (a rule for the node named calib only).
+    takes ``remaps``, e.g. ``{'calib:__node': 'calib_2'}`` (a rule for the node named calib only). ``niceness``
+    > 0 starts the process through ``nice`` (:attr:`prefix`, launch's ``prefix``).
     """
 
     package: str
@@ -122,6 +130,12 @@ class NodeSpec:
     param_files: list = field(default_factory=list)
     renamed: bool = True
     remaps: dict = field(default_factory=dict)
+    niceness: int = 0
+
+    @property
+    def prefix(self) -> list:
+        """Command words before the executable: ``nice -n N`` (which execs it: the same process id)."""
+        return ['nice', '-n', str(self.niceness)] if self.niceness else []
 
     @property
     def label(self) -> str:
@@ -232,11 +246,13 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
         if s.drone_process:   # one process, the nodes keep their names: /Dn/calib, /Dn/register, calib_2, ...
             nodes.append(NodeSpec('matrix_bringup', 'drone', f'drone{suffix}', ns,
                                   {**calib, **register, 'views': group}, register_files, renamed=False,
-                                  remaps={f'{n}:__node': f'{n}{suffix}' for n in DRONE_NODES if suffix}))
+                                  remaps={f'{n}:__node': f'{n}{suffix}' for n in DRONE_NODES if suffix},
+                                  niceness=s.drone_niceness))
             continue
-        nodes += [NodeSpec('matrix_calib', 'calib', f'calib{suffix}', ns, {**calib, 'views': group}),
+        nodes += [NodeSpec('matrix_calib', 'calib', f'calib{suffix}', ns, {**calib, 'views': group},
+                           niceness=s.drone_niceness),
                   NodeSpec('matrix_register', 'register', f'register{suffix}', ns, {**register, 'views': group},
-                           register_files)]
+                           register_files, niceness=s.drone_niceness)]
     # In lockstep the fuse node waits as long as the player: every view is fused, results are deterministic.
     fuse = {'views': list(s.views), 'input_kind': s.input_kind, 'image_kind': 'compressed' if bag.compressed else 'raw',
             'sync_timeout': s.lockstep_timeout if s.lockstep else s.sync_timeout,

@@ -39,6 +39,11 @@ def executable_path(package: str, executable: str) -> Path:
     return path
 
 
+def command(spec: NodeSpec) -> list:
+    """The command line that starts ``spec``'s process: its prefix (``nice``), executable and ROS arguments."""
+    return [*spec.prefix, str(executable_path(spec.package, spec.executable)), *spec.ros_args()]
+
+
 def _die_with_parent():   # runs in the child between fork and exec
     ctypes.CDLL('libc.so.6', use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
@@ -54,7 +59,7 @@ class Graph:
 
     def start(self, spec: NodeSpec) -> None:
         self.log_dir.mkdir(parents=True, exist_ok=True)
-        cmd = [str(executable_path(spec.package, spec.executable)), *spec.ros_args()]
+        cmd = command(spec)
         log = open(self.log_path(spec), 'w')
         log.write(' '.join(cmd) + '\n')
         log.flush()
