@@ -124,12 +124,16 @@ def main() -> int:
     parser.add_argument('--anchor_search_margin_px', type=float, default=defaults.anchor_search_margin_px,
                         help="mode track: a doubted chain's anchor searches the predicted ground grown by this many "
                         'pixels, 0 = the whole image (RegisterSettings.anchor_search_margin_px)')
+    parser.add_argument('--track_refine_scale', type=float, default=defaults.track_refine_scale,
+                        help="mode track: scale of the refinement against the anchor, 0.25 = the flow's own "
+                        '(RegisterSettings.track_refine_scale)')
     add_settings_arguments(parser, CalibSettings)   # e.g. --track_corners true; the config follows each folder
     args = parser.parse_args()
     calib_settings = settings_from_namespace(CalibSettings, args)
     register_settings = RegisterSettings(mode=args.mode, reanchor_every=args.reanchor_every,
                                          anchor_by_flow=args.anchor_by_flow, matcher=args.matcher,
-                                         anchor_search_margin_px=args.anchor_search_margin_px)
+                                         anchor_search_margin_px=args.anchor_search_margin_px,
+                                         track_refine_scale=args.track_refine_scale)
     cv2.setNumThreads(1)
     threadpool_limits(1, user_api='blas')   # as the nodes (NodeSettings.apply_threads)
     import torch

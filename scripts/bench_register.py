@@ -43,7 +43,8 @@ from matrix_core.register.weights import MissingWeightsError
 from matrix_core.settings import parse_bool
 
 # The flags that set RegisterSettings fields of the same names in every run (mode, matching, tracking).
-MODE_FLAGS = ('mode', 'reanchor_every', 'anchor_by_flow', 'matcher', 'track_min_inliers', 'anchor_search_margin_px')
+MODE_FLAGS = ('mode', 'reanchor_every', 'anchor_by_flow', 'matcher', 'track_min_inliers', 'anchor_search_margin_px',
+              'track_refine_scale')
 
 
 def feature_budget(backend: str, scale: float, kornia_features: int) -> tuple:
@@ -152,6 +153,9 @@ def main(argv=None) -> int:
     parser.add_argument('--anchor_search_margin_px', type=float, default=RegisterSettings().anchor_search_margin_px,
                         help="mode track: a doubted chain's anchor searches the predicted ground grown by this "
                         'many pixels, 0 = the whole image (RegisterSettings.anchor_search_margin_px)')
+    parser.add_argument('--track_refine_scale', type=float, default=RegisterSettings().track_refine_scale,
+                        help='mode track: scale of the refinement against the anchor, 0.25 = the flow\'s own '
+                        '(RegisterSettings.track_refine_scale)')
     args = parser.parse_args(argv)
 
     cv2.setNumThreads(1)

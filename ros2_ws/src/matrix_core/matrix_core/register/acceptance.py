@@ -27,6 +27,7 @@ def settings_for_width(settings: RegisterSettings, width: int) -> RegisterSettin
     the same inlier threshold in full-resolution-equivalent pixels."""
     factor = FULL_WIDTH / width
     return replace(settings, scale=min(1.0, settings.scale * factor),
+                   track_refine_scale=min(1.0, settings.track_refine_scale * factor),
                    ransac_threshold_px=settings.ransac_threshold_px / factor)
 
 

@@ -52,12 +52,18 @@ def to_gray(image: np.ndarray) -> np.ndarray:
     return image
 
 
-def resize(gray: np.ndarray, scale: float) -> np.ndarray:
-    """Resize by ``scale`` (INTER_AREA when shrinking); returns the input when scale == 1."""
-    if scale == 1.0:
+def scaled_size(shape: tuple, scale: float) -> tuple:
+    """(width, height) of an image of ``shape`` ((H, W, ...)) resized by ``scale``."""
+    h, w = shape[:2]
+    return max(1, round(w * scale)), max(1, round(h * scale))
+
+
+def resize(gray: np.ndarray, scale: float, size: tuple = None) -> np.ndarray:
+    """Resize by ``scale`` (INTER_AREA when shrinking), or to ``size`` ((width, height)) when given;
+    returns the input when scale == 1 and no size is given."""
+    if scale == 1.0 and size is None:
         return gray
-    h, w = gray.shape[:2]
-    size = (max(1, round(w * scale)), max(1, round(h * scale)))
+    size = size or scaled_size(gray.shape, scale)
     return cv2.resize(gray, size, interpolation=cv2.INTER_AREA if scale < 1 else cv2.INTER_LINEAR)
 
 

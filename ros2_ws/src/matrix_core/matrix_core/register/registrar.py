@@ -24,7 +24,7 @@ from matrix_core.geometry.camera import Camera
 from matrix_core.register.backends import make_backend
 from matrix_core.register.features import Features
 from matrix_core.register.fit import fit_homography
-from matrix_core.register.flow_tracking import FlowTracker, TrackState, registered_camera
+from matrix_core.register.flow_tracking import FlowTracker, TrackImages, TrackState, registered_camera
 from matrix_core.register.gate import check_registration
 from matrix_core.register.ground_mask import ground_mask
 from matrix_core.register.matching import match_symmetric
@@ -68,9 +68,10 @@ class Registrar:
         self._weak_streak = 0
         self._frames_on_key = 0  # frames registered since the last re-keying
         self._last_good = None  # (frame_id, features, ref_H_img)
-        self.tracker = FlowTracker(s.scale, s.track_corners, s.ransac_threshold_px, s.estimator, s.seed)
+        self.tracker = FlowTracker(s.scale, s.track_corners, s.ransac_threshold_px, s.estimator, s.seed,
+                                   s.track_refine_scale)
         self._track = None  # TrackState of the last registered frame (mode track), None: next one anchors
-        # mode track, anchor_by_flow: the reference as a chain's anchor (its reduced image and ground corners)
+        # mode track, anchor_by_flow: the reference as a chain's anchor (its reduced images and ground corners)
         self._reference_track = None
         self._flow_anchor_failures = 0  # anchors by flow that did not hold in a row
         # mode track: the reference's ground at the features' scale, where a doubted chain's anchor searches
@@ -105,18 +106,18 @@ class Registrar:
                                 f'image is {w}x{h}, the reference is {cam.width}x{cam.height}')
         if self.settings.mode != 'track':
             return self._register_full(image, frame_id, start)
-        gray = self.tracker.reduce(image)
+        images = self.tracker.reduce(image)
         state, every = self._track, self.settings.reanchor_every
         due = bool(state is not None and every and state.steps + 1 >= every)
-        tracked, why, predicted = self._flow(gray, start)
+        tracked, why, predicted = self._flow(images, start)
         if tracked is not None:
             return tracked
-        anchored, why_not = self._anchor_by_flow(gray, frame_id, start, due)
+        anchored, why_not = self._anchor_by_flow(images, frame_id, start, due)
         if anchored is not None:
             return replace(anchored, message=f'anchor by flow to the reference: {why}')
         why = f'{why}; by flow to the reference: {why_not}' if why_not else why
         result = self._register_full(image, frame_id, start, self._search_region(predicted))
-        self._anchor(gray, result, frame_id)
+        self._anchor(images, result, frame_id)
         return replace(result, message='; '.join(filter(None, [f'anchor: {why}', result.message])),
                        seconds=time.perf_counter() - start)
 
@@ -157,7 +158,7 @@ class Registrar:
             result = replace(result, message=message)
         return replace(result, seconds=time.perf_counter() - start)
 
-    def _flow(self, gray: np.ndarray, start) -> tuple:
+    def _flow(self, images: TrackImages, start) -> tuple:
         """(tracked Registration, '', None) when the flow from the previous frame holds, else (None, why it
         does not: the reason of the anchor that follows, the chain's (3, 3) estimate of ``ref_H_cur``: the
         refined fit with too few inliers, or the flow step alone; None when there is none or the gate
@@ -167,7 +168,7 @@ class Registrar:
             return None, 'no registered previous frame', None
         if s.reanchor_every and state.steps + 1 >= s.reanchor_every:
             return None, f'due (every {s.reanchor_every} frames)', None
-        step = self.tracker.step(state, gray)
+        step = self.tracker.step(state, images)
         anchor = state.anchor
         if step.anchor_H_cur is None:   # the flow step alone, chained to the previous frame, still predicts
             predicted = None if step.prev_H_cur is None else \
@@ -186,12 +187,12 @@ class Registrar:
             return None, f'chain doubted: {reason}', None
         self._previous_center, self._frames_since_good = implied.center, 1
         steps = state.steps + 1
-        self._track = TrackState(anchor, gray, step.corners, step.anchor_H_cur, steps, step.prev_H_cur)
+        self._track = TrackState(anchor, images, step.corners, step.anchor_H_cur, steps, step.prev_H_cur)
         return self._result(STATUS_OK, H, step.tracked, step.inliers, step.error_px, start,
                             f'tracked: {steps} frame(s) after its anchor', anchor.chain, implied), '', None
 
-    def _anchor_by_flow(self, gray: np.ndarray, frame_id, start, due: bool) -> tuple:
-        """(Registration, '') of ``gray`` refined against the reference's own ground corners, which starts a new
+    def _anchor_by_flow(self, images: TrackImages, frame_id, start, due: bool) -> tuple:
+        """(Registration, '') of the frame of ``images`` refined against the reference's own ground corners, which starts a new
         chain; (None, why not) when it does not hold (then features decide) or is not tried ('').
 
         The prediction comes from the last registered frame when there is one (its flow, chained to the
@@ -203,17 +204,17 @@ class Registrar:
         if reference is None or self.key is not None or (self._flow_anchor_failures >= FLOW_ANCHOR_TRIES
                                                           and not due):
             return None, ''
-        result, why_not = self._flow_to_reference(gray, frame_id, start, state, reference)
+        result, why_not = self._flow_to_reference(images, frame_id, start, state, reference)
         self._flow_anchor_failures = 0 if result is not None else self._flow_anchor_failures + 1
         return result, why_not
 
-    def _flow_to_reference(self, gray, frame_id, start, state, reference) -> tuple:
+    def _flow_to_reference(self, images: TrackImages, frame_id, start, state, reference) -> tuple:
         """:meth:`_anchor_by_flow` from ``state`` (or the reference's own TrackState when None)."""
         s = self.settings
         if state is not None:  # the previous frame, seen from the reference: the flow predicts ref_H_cur
             state = replace(state, anchor=reference.anchor,
                             anchor_H_img=state.anchor.ref_H_img @ state.anchor_H_img)
-        step = self.tracker.step(state or reference, gray)
+        step = self.tracker.step(state or reference, images)
         if step.anchor_H_cur is None:
             return None, step.reason
         if step.inliers < s.track_min_inliers:
@@ -228,15 +229,15 @@ class Registrar:
             return None, reason
         self._previous_center, self._frames_since_good = implied.center, 1
         result = self._result(STATUS_OK, H, step.tracked, step.inliers, step.error_px, start, '', None, implied)
-        self._anchor(gray, result, frame_id)
+        self._anchor(images, result, frame_id)
         return result, ''
 
-    def _anchor(self, gray: np.ndarray, result: Registration, frame_id) -> None:
+    def _anchor(self, images: TrackImages, result: Registration, frame_id) -> None:
         """Start a new chain at a full registration (none after a failure: the next frame anchors again)."""
         self._track = None
         if result.ok:
             s = self.settings
-            self._track = self.tracker.anchor(gray, registered_camera(self.reference.camera, result.implied),
+            self._track = self.tracker.anchor(images, registered_camera(self.reference.camera, result.implied),
                                               result.ref_H_img, f'{result.reference_id}<-track:{frame_id}',
                                               result.inliers, self.reference.area, s.ground_margin_m,
                                               s.exclude_boxes)
