@@ -169,8 +169,8 @@ class FlowTracker:
         # full-resolution pixels <-> reduced pixels (pixel-centre convention of features.to_full_resolution)
         self.full_H_small = pixel_scale_homography(1 / scale, 1 / scale)
         self.small_H_full = np.linalg.inv(self.full_H_small)
-        self.full_H_fine = pixel_scale_homography(1 / self.refine_scale, 1 / self.refine_scale)
-        self.fine_H_full = np.linalg.inv(self.full_H_fine)
+        self.full_H_refine = pixel_scale_homography(1 / self.refine_scale, 1 / self.refine_scale)
+        self.refine_H_full = np.linalg.inv(self.full_H_refine)
         side = int(REFINE_WINDOW_FLOW_PX * self.refine_scale / scale) // 2 * 2 + 1
         self.refine_window = (side, side)
         self.refine_levels = REFINE_LEVELS_FLOW_SCALE if self.refine_scale == scale else REFINE_LEVELS_FINE
@@ -195,8 +195,8 @@ class FlowTracker:
         full = apply_homography(self.full_H_small, xy)
         keep = ground_pixels(camera, full, area, margin_m, boxes)
         corners = xy[keep].reshape(-1, 1, 2).astype(np.float32)
-        fine = apply_homography(self.fine_H_full, full[keep]).reshape(-1, 1, 2).astype(np.float32)
-        anchor = Anchor(images, fine, ref_H_img, chain, inliers)
+        refine = apply_homography(self.refine_H_full, full[keep]).reshape(-1, 1, 2).astype(np.float32)
+        anchor = Anchor(images, refine, ref_H_img, chain, inliers)
         return TrackState(anchor, images, corners, np.eye(3))
 
     def step(self, state: TrackState, images: TrackImages) -> FlowStep:
@@ -234,7 +234,7 @@ class FlowTracker:
         (current -> anchor, full resolution), the anchor's corners tracked into it and ``anchor_H_cur`` fitted.
         Returns (fit, (N,) bool corners tracked, (n, 2) their current full-resolution positions, median
         full-resolution px motion of the inliers in the warped image: how far ``predicted`` was off)."""
-        F, S = self.full_H_fine, self.fine_H_full
+        F, S = self.full_H_refine, self.refine_H_full
         target = anchor.images.refine
         warped = cv2.warpPerspective(refine, S @ predicted @ F, target.shape[::-1], flags=cv2.INTER_LINEAR)
         found, good = _track(target, warped, anchor.corners, anchor.corners.copy(), self.refine_window,

@@ -192,8 +192,8 @@ class Registrar:
                             f'tracked: {steps} frame(s) after its anchor', anchor.chain, implied), '', None
 
     def _anchor_by_flow(self, images: TrackImages, frame_id, start, due: bool) -> tuple:
-        """(Registration, '') of the frame of ``images`` refined against the reference's own ground corners, which starts a new
-        chain; (None, why not) when it does not hold (then features decide) or is not tried ('').
+        """(Registration, '') of the frame of ``images`` refined against the reference's own ground corners, which
+        starts a new chain; (None, why not) when it does not hold (then features decide) or is not tried ('').
 
         The prediction comes from the last registered frame when there is one (its flow, chained to the
         reference), else from the reference itself (flow from the reference image: the drone hovers near its
