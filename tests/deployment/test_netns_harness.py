@@ -40,10 +40,16 @@ def _alive(pids) -> list:
     return [p for p in pids if running(p)]
 
 
-def _in_namespaces(hosts: Hosts) -> list:
-    """pids of every process in the hosts' namespaces (``ip netns pids``)."""
-    return [int(p) for h in hosts.hosts for p in subprocess.run(['ip', 'netns', 'pids', hosts.ns(h)],
-                                                                   capture_output=True, text=True).stdout.split()]
+def _in_namespaces(hosts: Hosts, at_least: int = 0) -> list:
+    """pids of every process in the hosts' namespaces (``ip netns pids``), once there are ``at_least`` (a
+    process just started may not have entered its namespace yet: ``ip netns exec`` joins it, then execs)."""
+    deadline = time.monotonic() + 10
+    while True:
+        pids = [int(p) for h in hosts.hosts for p in subprocess.run(['ip', 'netns', 'pids', hosts.ns(h)],
+                                                                      capture_output=True, text=True).stdout.split()]
+        if len(pids) >= at_least or time.monotonic() > deadline:
+            return pids
+        time.sleep(0.05)
 
 
 def test_links_cut_restore_limit_and_nothing_left(tmp_path):
@@ -62,7 +68,7 @@ def test_links_cut_restore_limit_and_nothing_left(tmp_path):
         assert 'tbf' in qdisc and '20Mbit' in qdisc, qdisc
         stats = hosts.link_bytes('D1')
         assert stats['up'][0] > 0 and stats['down'][0] > 0 and stats['dropped'] == 0
-        inside = _in_namespaces(hosts)
+        inside = _in_namespaces(hosts, at_least=1)
         assert sleeper.pid in inside
     assert sleeper.poll() is not None and _alive(inside) == []
     assert namespaces(owner_pid=hosts_pid(hosts.tag)) == []
@@ -82,7 +88,7 @@ def test_teardown_on_failure_on_sigterm_and_after_the_owner_was_killed(tmp_path)
     with pytest.raises(RuntimeError, match='boom'):
         with Hosts(['D1']) as hosts:
             hosts.start(GROUND, ['sleep', '600'], tmp_path / 'a.log')
-            inside = _in_namespaces(hosts)
+            inside = _in_namespaces(hosts, at_least=1)
             raise RuntimeError('boom')
     assert len(inside) == 1 and _alive(inside) == [] and namespaces(owner_pid=hosts_pid(hosts.tag)) == []
 
