@@ -132,3 +132,41 @@ def test_heads_at_no_peak(shipped):
     none = torch.zeros(0, dtype=torch.long)
     tracking, offset = network.heads_at(out.fused, none, none, offset=True)
     assert tracking.shape == offset.shape == (0, 2)
+
+
+def test_a_warmed_up_network_gives_the_same_outputs_and_keeps_nothing(shipped):
+    # the fuse node warms the network up before its first frame: zeros through both temporal passes
+    model, settings, data = shipped
+    cold, warm = FrameNetwork(model, data.grid.shape), FrameNetwork(model, data.grid.shape)
+    x = data.inputs(data.frames[0])
+    warm.warm_up(len(x['images']), (x['images'].shape[-1], x['images'].shape[-2]))
+    assert not warm._grids   # no sampling grid of the zeros' identity warp is served to a real frame
+    mask, previous = torch.ones(len(x['images']), dtype=torch.bool), {}
+    for network in (cold, warm):
+        first = network(x['images'], x['feat_H_grid'], mask)
+        out = network(x['images'], x['feat_H_grid'], mask, first.carry)
+        previous[id(network)] = (first.heatmap, out.heatmap, out.carry)
+    for a, b in zip(previous[id(cold)], previous[id(warm)]):
+        torch.testing.assert_close(a, b, atol=0, rtol=0)
+
+
+def test_the_carry_computed_on_demand_or_ahead_gives_the_same_next_frame(shipped):
+    # a frame's carry waits until the next frame reads it, or until prepare_next (the fuse node calls it once
+    # the frame is published): the next frame's outputs are bit for bit those from the carry tensor
+    model, settings, data = shipped
+    network = FrameNetwork(model, data.grid.shape)
+    x0, x1 = data.inputs(data.frames[0]), data.inputs(data.frames[1])
+    mask = torch.ones(len(x0['images']), dtype=torch.bool)
+    first = network(x0['images'], x0['feat_H_grid'], mask)
+    with_previous = network(x1['images'], x1['feat_H_grid'], mask, first.carry)
+    assert callable(with_previous._carry)   # not computed: nobody read it yet
+    reference = network(x0['images'], x1['feat_H_grid'], mask, with_previous.carry)
+    for prepare in (False, True):
+        second = network(x1['images'], x1['feat_H_grid'], mask, first)
+        if prepare:
+            network.prepare_next(second)
+            assert not callable(second._carry) and second.previous_term is not None
+        third = network(x0['images'], x1['feat_H_grid'], mask, second)
+        torch.testing.assert_close(second.heatmap, with_previous.heatmap, atol=0, rtol=0)
+        torch.testing.assert_close(third.heatmap, reference.heatmap, atol=0, rtol=0)
+        torch.testing.assert_close(third.carry, reference.carry, atol=0, rtol=0)

@@ -46,6 +46,7 @@ def _live(sequence, model, make_view, settings=None):
     for k, frame in enumerate(dataset.frames):
         views = {v: make_view(dataset, v, frame) for v in dataset.views}
         results.append(fuser.process(1.0 + 0.5 * k, {v: x for v, x in views.items() if x is not None}))
+        fuser.prepare_next()   # as the fuse node, once a frame is published (offline, run_frames computes it later)
     return results
 
 

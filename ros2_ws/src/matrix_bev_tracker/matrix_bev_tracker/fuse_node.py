@@ -46,8 +46,8 @@ class FuseNode(Node):
         super().__init__('fuse')
         self.settings = s = declare_settings(self, FuseNodeSettings, defaults, live=LIVE_PARAMETERS)
         self.fuser = BevFuser(s)
-        self.inputs = ViewInputs(self.fuser.input_size, s.min_confidence, s.jpeg_reduced_decode)
-        self.frames_published = 0
+        warm_up_s = self.fuser.warm_up()   # before subscribing: the first frame would pay for the network's kernels
+        self.inputs, self.frames_published = ViewInputs(self.fuser.input_size, s.min_confidence, s.jpeg_reduced_decode), 0
         self._start_fresh()
         self.connections = {v: self._subscribe_view(v) for v in s.views}
         qos = publisher_qos()
@@ -62,8 +62,8 @@ class FuseNode(Node):
         # Sync timeouts run on the wall clock: under /clock in lockstep, sim time stops while the player waits.
         self.create_timer(0.05, self._poll, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(
-            f'fusing {len(s.views)} views ({s.image_kind} images, {s.input_kind}) with {s.checkpoint_path()}; '
-            f'grid {self.fuser.grid.shape} cells of {self.fuser.grid.cell} m; tracks on {s.tracks_topic}')
+            f'fusing {len(s.views)} views ({s.image_kind} images, {s.input_kind}) with {s.checkpoint_path()} (warm-up '
+            f'{warm_up_s:.2f} s); grid {self.fuser.grid.shape} cells of {self.fuser.grid.cell} m; tracks on {s.tracks_topic}')
 
     def _subscribe_view(self, view: str) -> SubscribeWhenConnected:
         """The view's geometry now, its images once the geometry has a publisher (matrix_ros.connect)."""
@@ -144,6 +144,7 @@ class FuseNode(Node):
             self.get_logger().info(f't={frame.stamp:.3f} s: reset {" and ".join(result.resets)} state')
         self.pubs['diagnostics'].publish(out.fuse_diagnostics(header, frame, result, time.monotonic() - frame.first_arrival, latency,
                                                               self.sync.late_items, self.frames_published))
+        self.fuser.prepare_next()   # published: now the next frame's share of this one (its latency is spared it)
 
     def _on_reset(self, request, response):
         self._start_fresh()
@@ -152,9 +153,8 @@ class FuseNode(Node):
         return response
 
     def close(self) -> None:
-        self.get_logger().info(f'published {self.frames_published} frames; '
-                               f'{len(self.sync.pending_stamps)} pending frames dropped at shutdown; '
-                               f'{self.sync.late_items} late messages')
+        self.get_logger().info(f'published {self.frames_published} frames; {len(self.sync.pending_stamps)} pending '
+                               f'frames dropped at shutdown; {self.sync.late_items} late messages')
 
 
 def main(argv=None) -> int:

@@ -17,7 +17,6 @@ The weights are a snapshot taken at construction (a model trained further needs 
 """
 
 import copy
-from dataclasses import dataclass
 
 import torch
 import torch.nn.functional as F
@@ -40,22 +39,33 @@ def fold_batch_norms(module: nn.Module) -> nn.Module:
     return module
 
 
-@dataclass
 class FrameResult:
     """One frame: ``heatmap`` (1, R, Q) logits; ``fused`` (1, C, R, Q) the features the heads read (for
     :meth:`FrameNetwork.heads_at`); ``carry`` (1, C, R, Q) the features to pass as ``previous`` next frame
-    (``BevFusionNet.forward``'s ``bev``)."""
+    (``BevFusionNet.forward``'s ``bev``). Only the next frame needs the carry: it is computed when first read
+    (or by :meth:`FrameNetwork.prepare_next`), so that this frame's detections need not wait for it.
 
-    heatmap: torch.Tensor
-    fused: torch.Tensor
-    carry: torch.Tensor
+    Args: ``carry`` the tensor or a function of no argument that computes it.
+    """
+
+    def __init__(self, heatmap: torch.Tensor, fused: torch.Tensor, carry):
+        self.heatmap, self.fused, self._carry = heatmap, fused, carry
+        self.previous_term = None   # the carry's term in the next frame's temporal convolution, once computed
+
+    @property
+    def carry(self) -> torch.Tensor:
+        if callable(self._carry):
+            with torch.no_grad():
+                self._carry = self._carry()
+        return self._carry
 
 
 class FrameNetwork:
     """Args: ``model`` a BevFusionNet (its weights are copied), ``grid_shape`` (rows, cols) of the BEV grid.
 
     Call with one frame: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3), ``view_mask`` (V,) bool and
-    ``previous`` (1, C, R, Q) or None -> :class:`FrameResult`. No gradients.
+    ``previous``, the last frame's :class:`FrameResult` or its carry (1, C, R, Q), or None -> :class:`FrameResult`.
+    No gradients.
     """
 
     def __init__(self, model, grid_shape: tuple):
@@ -102,12 +112,44 @@ class FrameNetwork:
             return FrameResult(self._heatmap(aggregated), aggregated, aggregated)
         t = self.temporal
         current = F.conv2d(aggregated, t['current'], t['bias'], padding=1)
-        carry = aggregated + t['rest'](torch.relu(current))
-        fused = carry
-        if previous is not None:
-            with_previous = current + F.conv2d(previous, t['previous'], padding=1) + t['flag']
+
+        def carry():   # the pass without the previous features: what the next frame gets
+            return aggregated + t['rest'](torch.relu(current))
+
+        if previous is None:
+            fused = carry = carry()   # the heads read it now
+        else:
+            with_previous = current + self._previous_term(previous) + t['flag']
             fused = aggregated + t['rest'](torch.relu(with_previous))
         return FrameResult(self._heatmap(fused), fused, carry)
+
+    @torch.no_grad()
+    def prepare_next(self, result: FrameResult) -> None:
+        """Compute now what the next frame needs of ``result``: its carry and the carry's convolution in the next
+        frame's temporal block (otherwise computed by the next call; a live node calls this after publishing the
+        frame, so that neither the frame's results nor the next frame wait for them: ~0.03 s on one core)."""
+        if self.temporal is not None:
+            self._previous_term(result)
+
+    def _previous_term(self, previous):
+        """conv(previous carry) with the temporal block's weights of the previous features (kept on a
+        :class:`FrameResult`)."""
+        if isinstance(previous, FrameResult):
+            if previous.previous_term is None:
+                previous.previous_term = self._previous_term(previous.carry)
+            return previous.previous_term
+        return F.conv2d(previous, self.temporal['previous'], padding=1)
+
+    def warm_up(self, n_views: int, image_size: tuple) -> None:
+        """One frame of ``n_views`` zero images of (w, h) ``image_size``, without and with previous features: the
+        first calls of each convolution build its kernels (measured ~0.1 s more on one core over the first two
+        frames), which a live graph's first frames should not pay. Nothing is kept (outputs, sampling grids)."""
+        w, h = image_size
+        images, mask = torch.zeros(n_views, 3, h, w), torch.ones(n_views, dtype=torch.bool)
+        identity = torch.eye(3).repeat(n_views, 1, 1)   # any finite warp: the grid's cells see the image's
+        first = self(images, identity, mask)
+        self.heads_at(self(images, identity, mask, first.carry).fused, torch.tensor([0]), torch.tensor([0]), True)
+        self._grids.clear()
 
     def _grid(self, view: int, feat_H_grid, feat_size) -> tuple:
         """The view's sampling grid and seen mask, recomputed only when its feat_H_grid changed."""

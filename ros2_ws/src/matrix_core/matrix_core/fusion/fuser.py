@@ -82,6 +82,23 @@ class BevFuser:
         self.tracker = BevTracker(settings.tracker_settings())
         self.reset()
 
+    def warm_up(self) -> float:
+        """Run the network once on zeros (``FrameNetwork.warm_up``), so that a live graph's first frames do not
+        pay for building its kernels; the fusion's state is unchanged. Returns the seconds it took."""
+        t0 = time.perf_counter()
+        self.runner.network.warm_up(len(self.settings.views), self.input_size)
+        return time.perf_counter() - t0
+
+    def prepare_next(self) -> None:
+        """Compute now what the next frame needs of the last one (``SequenceRunner.prepare_next``): a live node
+        calls it after publishing a frame, in time that would otherwise lie between its results and the next
+        frame's. Without it the next :meth:`process` computes the same (the results do not change). An error here
+        restarts the temporal state, as one in :meth:`process_safely` does."""
+        try:
+            self.runner.prepare_next()
+        except (ValueError, RuntimeError):
+            self.runner.reset()
+
     def reset(self) -> None:
         """Start fresh: no temporal features, no tracks (ids restart at 1)."""
         self.runner.reset()
