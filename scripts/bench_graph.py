@@ -15,7 +15,8 @@ each played in two ways:
   and frames fused without every view say whether the graph keeps up.
 
 A probe subscribes to the first drone's images, ``/tracks`` and the fuse node's diagnostics and measures per
-frame the wall time from the frame's first image to its tracks (latency). Every process's CPU time (user +
+frame the wall time from the frame's first image to its tracks (latency), and to the last drone's calib status
+(calibration: nothing in the graph waits for it, so it may come after the tracks). Every process's CPU time (user +
 system from /proc, DDS and idle spinning included) between the first image and the last tracks, divided by
 the frames, is each stage's CPU-s per frame (``drone``: calib + register of all drones). The probe also lists
 the graph's topics: with JPEG bags no raw ``sensor_msgs/Image`` may cross DDS. ``--runs N`` repeats each
@@ -82,6 +83,7 @@ class Probe:
     def __init__(self, view: str, compressed: bool):
         self.node = rclpy.create_node('bench_graph_probe')
         self.first_image, self.tracks, self.views_used, self.drone_done, self.raw_topics = {}, {}, {}, {}, set()
+        self.calibrated = {}   # stamp -> arrival of each drone's calib status
         kind, topic = (CompressedImage, f'/{view}/image/compressed') if compressed else (Image, f'/{view}/image_raw')
         self.node.create_subscription(kind, topic, lambda m: self.first_image.setdefault(
             stamp_to_seconds(m.header.stamp), time.monotonic()), qos_by_name('reliable', 2))
@@ -94,6 +96,8 @@ class Probe:
             if st.name.startswith(('calib/', 'register/')):
                 stamp = stamp_to_seconds(msg.header.stamp)
                 self.drone_done[stamp] = self.drone_done.get(stamp, 0) + 1
+                if st.name.startswith('calib/'):
+                    self.calibrated.setdefault(stamp, []).append(time.monotonic())
             elif st.name == 'fuse':
                 self.views_used[stamp_to_seconds(msg.header.stamp)] = int(
                     next(kv.value for kv in st.values if kv.key == 'views_used'))
@@ -151,6 +155,11 @@ def run_once(settings: GraphSettings, facts: BagFacts, run: Path, drain_s: float
         figures['rate'] = len(lat) / (max(probe.tracks.values()) - min(probe.first_image.values()))
         figures['latency_median'], figures['latency_p95'] = np.median(lat), np.percentile(lat, 95)
         figures['latencies'] = lat.tolist()
+        # calib: nothing in the graph waits for it (it may run behind the tracks: drone_link's own thread)
+        calib = [max(probe.calibrated[s]) - probe.first_image[s] for s in stamps
+                 if len(probe.calibrated.get(s, ())) == len(settings.views)]
+        figures['calib_p95'] = np.percentile(calib, 95) if calib else float('nan')
+        figures['calib_missing'] = len(settings.views) * len(stamps) - sum(len(probe.calibrated.get(s, ())) for s in stamps)
         stages = {}
         for label, end in cpu_end.items():
             stages[stage_of(label)] = stages.get(stage_of(label), 0.0) + (end - cpu_start.get(label, 0.0)) / len(lat)
@@ -197,7 +206,8 @@ def report(name: str, runs: list, views: int) -> int:
     print(f'== {name} ({len(runs)} run{"s" if len(runs) > 1 else ""}, medians)')
     print(f'   frames played {med("played"):.0f}, dropped (no tracks) {med("dropped"):.0f}, fused without every '
           f'view {med("incomplete"):.0f}; rate {med("rate"):.2f} frames/s; latency first image -> tracks median '
-          f'{med("latency_median"):.2f} s, p95 {med("latency_p95"):.2f} s')
+          f'{med("latency_median"):.2f} s, p95 {med("latency_p95"):.2f} s; first image -> every drone\'s calib '
+          f'status p95 {med("calib_p95"):.2f} s, statuses missing {med("calib_missing"):.0f}')
     print('   CPU s per frame: ' + ', '.join(f'{k} {v:.2f}' for k, v in sorted(cpu.items(), key=lambda kv: -kv[1]))
           + f'; all {total:.2f} -> at most {os.cpu_count() / total:.2f} frames/s on {os.cpu_count()} cores'
           + (f'; per drone {(cpu.get("drone", 0) + cpu.get("calib", 0) + cpu.get("register", 0)) / views:.3f}'

@@ -5,8 +5,10 @@ This test publishes real MATRIX JPEG frames of drone D3 and checks that the one 
 every frame's registration handed over in process, and that what it publishes - ``D3/homography``,
 ``D3/camera_info``, ``/diagnostics`` from the nodes ``register`` and ``calib`` - is what separate calib and
 register nodes compute: the same core on the colour decode of the same JPEG (this process), within the
-tolerance of the grey decode, and right against the ground truth. Then a corrupt JPEG: both nodes report
-the bad input and the process keeps running."""
+tolerance of the grey decode, and right against the ground truth; calib runs on a thread of its own, niced
+further. Then a corrupt JPEG: both nodes report the bad input and the process keeps running."""
+
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -55,6 +57,12 @@ def _separate_nodes(dataset, config, jpegs):
     return out
 
 
+def _thread_niceness(pid: int) -> dict:
+    """thread id -> niceness of every thread of process ``pid`` (/proc/PID/task/TID/stat, field 19)."""
+    tasks = Path(f'/proc/{pid}/task')
+    return {int(t.name): int((t / 'stat').read_text().rsplit(')', 1)[1].split()[16]) for t in tasks.iterdir()}
+
+
 def test_drone_process_decodes_once_and_hands_the_registration_to_calib(matrix_sample, node_executable):
     dataset = MatrixDataset(matrix_sample)
     config = config_for_dataset(matrix_sample)
@@ -88,7 +96,7 @@ def test_drone_process_decodes_once_and_hands_the_registration_to_calib(matrix_s
         bad = CompressedImage(header=Header(stamp=seconds_to_stamp(9.0)), format='jpeg', data=b'\xff\xd8' + bytes(50))
         images.publish(bad)
         spin_until(node, lambda: ('calib/D3', 9.0) in diags and ('register/D3', 9.0) in diags, [drone], 60)
-        alive = drone.poll() is None
+        alive, niceness = drone.poll() is None, _thread_niceness(drone.pid)
     finally:
         out = stop(drone)
         node.destroy_node()
@@ -97,6 +105,8 @@ def test_drone_process_decodes_once_and_hands_the_registration_to_calib(matrix_s
     assert readers == 1, out   # one image subscription in the process (register's)
     assert homography_readers == 1, out   # this test's: calib takes the registration in process
     assert alive, out
+    # calib on a thread of its own (thread_niceness, default 5): niced 5 more than the process's main thread
+    assert niceness[drone.pid] + CalibNodeSettings().thread_niceness in niceness.values(), niceness
     for name in ('register/D3', 'calib/D3'):   # a corrupt JPEG: each node says so, the process goes on
         assert diags[(name, 9.0)].level == DiagnosticStatus.ERROR and 'bad input' in diags[(name, 9.0)].message, out
     separate = _separate_nodes(dataset, config, jpegs)

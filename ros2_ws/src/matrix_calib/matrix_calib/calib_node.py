@@ -4,9 +4,9 @@ Per drone ``V`` (``views``; empty: the drone of the node's namespace), relative 
 or ``V/image/compressed`` (``compressed``), optionally ``V/<intrinsics_topic>`` (CameraInfo: K, D, size) and,
 with ``use_registration``, ``V/homography``: an image waits up to ``registration_wait_s`` for its registration,
 whose implied camera predicts the boards (else the image motion does). With register in one process
-(``matrix_ros.drone_link``) both come from register, the image decoded once. Publishes ``V/camera_info``
-(``p = K [R | t]``), ``V/pose``, a ``calib/V`` status per image on ``/diagnostics``, stamped as the image (stale:
-the last good pose, ``publish_stale``); bad input is reported, the node keeps running.
+(``matrix_ros.drone_link``; calib on its own thread) both come from register, the image decoded once. Publishes
+``V/camera_info`` (``p = K [R | t]``), ``V/pose``, a ``calib/V`` status per image on ``/diagnostics``, stamped as
+the image (stale: the last good pose, ``publish_stale``); bad input is reported, the node keeps running.
 """
 
 import time
@@ -43,6 +43,7 @@ class CalibNode(Node):
         self.link = link.connect(self._on_image, self._on_registration) if link else DroneLink()
         self.settings = s = declare_settings(self, CalibNodeSettings, defaults, shared=self.link.parameters)
         s.apply_threads()
+        self.own_thread = self.link.own_thread(self, s.thread_niceness)   # then spin_nodes spins it on its own thread
         self.scene = load_scene(s.config)
         reference = MatrixDataset(s.prior_dataset) if s.prior_dataset else None
         self.calibrators, self.pubs, self.syncs, self.connections = {}, {}, {}, {}
@@ -93,13 +94,12 @@ class CalibNode(Node):
         try:
             K = check_intrinsics(msg.k, d, size, f'{view} CameraInfo')
             if self.calibrators[view].set_intrinsics(K, d, size):
-                self.get_logger().info(f'{view}: intrinsics from {self.settings.intrinsics_topic}: fx {K[0, 0]:.2f}, '
-                                       f'{size[0]}x{size[1]}')
+                self.get_logger().info(f'{view}: intrinsics from {self.settings.intrinsics_topic}: fx {K[0, 0]:.2f}, {size[0]}x{size[1]}')
         except ValueError as exc:
             self.get_logger().error(f'{view}: CameraInfo intrinsics ignored: {exc}')
 
-    def _on_image(self, view: str, msg, image=None):
-        item = (msg, time.perf_counter(), image)   # image: decoded by register in this process, else None
+    def _on_image(self, view: str, msg, image=None, received=None):
+        item = (msg, received or time.perf_counter(), image)   # image: decoded by register in this process, else None
         if view not in self.syncs:
             return self._calibrate(view, *item)
         self._synced(view, self.syncs[view].add('image', stamp_to_seconds(msg.header.stamp), item, time.monotonic()))

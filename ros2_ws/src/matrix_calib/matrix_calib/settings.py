@@ -29,6 +29,10 @@ class CalibNodeSettings(NodeSettings, CalibSettings):
     registration_wait_s: float = field(default=3.0, metadata={
         'help': 'with use_registration: seconds (wall clock) an image waits for its registration before it is '
                 'calibrated from the image motion instead (logged)'})
+    thread_niceness: int = field(default=5, metadata={
+        'help': 'in one process with register (matrix_bringup.drone): calib runs on a thread of its own, this much '
+                'nicer than register\'s (at most 19 in all), so that on a computer shared by several drones the '
+                'registrations fuse waits for go first; -1 = on register\'s thread (matrix_ros.drone_link)'})
     prior_dataset: str = field(default='', metadata={
         'help': 'MATRIX folder whose reference/calibrations (and reference images) give the first prior; '
                 'empty = the config\'s initial_poses'})
@@ -37,3 +41,5 @@ class CalibNodeSettings(NodeSettings, CalibSettings):
         super().__post_init__()
         if self.registration_wait_s <= 0:
             raise ValueError('registration_wait_s must be positive')
+        if self.thread_niceness < -1:
+            raise ValueError(f'thread_niceness must be >= -1 (-1: no thread of its own), got {self.thread_niceness}')

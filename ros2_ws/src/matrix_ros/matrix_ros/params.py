@@ -3,11 +3,15 @@
 
 import argparse
 import dataclasses
+import os
 import signal
 import sys
+import threading
+import time
 import typing
 
 import rclpy
+import rclpy.executors
 from rcl_interfaces.msg import ParameterDescriptor, ParameterType, SetParametersResult
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
@@ -17,6 +21,7 @@ from matrix_core.settings import add_settings_arguments, settings_fields, settin
 from matrix_ros.executor import make_executor
 
 
+OWN_THREAD_DRAIN_S = 10.0   # at exit, longest a node's own thread goes on with the calls handed to it
 SPIN_TIMEOUT_S = 0.5   # longest wait for work before the stop flag is checked (0.1 s cost an idle node 0.7 % of a core)
 
 _PARAM_TYPES = {
@@ -118,7 +123,8 @@ def spin_node(node_factory, cls, argv=None, description: str = '', on_exit=None)
 
 def spin_nodes(node_factories, argv=None, description: str = '') -> int:
     """``main`` of a process of several nodes (``matrix_bringup.drone``): ROS parameters only (``--help``
-    prints ``description``), the nodes built in order and spun by one executor, in one thread."""
+    prints ``description``), the nodes built in order and spun by one executor, in one thread; a node whose
+    ``own_thread`` is a ``matrix_ros.drone_link.OwnThread`` by its own executor in a thread of its own."""
     argv = list(sys.argv if argv is None else argv)
     argparse.ArgumentParser(description=description).parse_args(remove_ros_args(argv)[1:])
     return _spin(node_factories, argv)
@@ -129,18 +135,57 @@ def _spin(node_factories, argv, on_exit=None) -> int:
     stop = []
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.append(True))
-    nodes, executor = [], make_executor()
+    nodes, executor, threads = [], make_executor(), []
     try:
         for factory in node_factories:
             nodes.append(factory())
-            executor.add_node(nodes[-1])
+            own = getattr(nodes[-1], 'own_thread', None)
+            if own is None:
+                executor.add_node(nodes[-1])
+            else:
+                threads.append(_spin_in_thread(nodes[-1], own, stop))
         while not stop and rclpy.ok():
             executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
     finally:
+        stop.append(True)
+        for thread in threads:
+            thread.join()
+        errors = [thread.error for thread in threads if thread.error is not None]
         for node in nodes:
             if on_exit is not None:
                 on_exit(node)
             node.destroy_node()
         executor.shutdown()
         rclpy.try_shutdown()
+    if errors:
+        raise errors[0]
     return 0
+
+
+def _spin_in_thread(node, own, stop: list) -> threading.Thread:
+    """Spin ``node`` on a new thread, ``own.niceness`` nicer than the process, until ``stop``; then make the
+    calls still handed to it (``own.waiting()``; at most ``OWN_THREAD_DRAIN_S``) so that none is lost on exit.
+    A SingleThreadedExecutor: the hand-over wakes it by a guard condition, which the EventsExecutor lacks."""
+    executor = rclpy.executors.SingleThreadedExecutor()
+    executor.add_node(node)
+
+    def spin():
+        tid = threading.get_native_id()
+        os.setpriority(os.PRIO_PROCESS, tid, min(19, os.getpriority(os.PRIO_PROCESS, tid) + own.niceness))
+        try:
+            while not stop and rclpy.ok():
+                executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
+            deadline = time.monotonic() + OWN_THREAD_DRAIN_S
+            while own.waiting() and rclpy.ok() and time.monotonic() < deadline:
+                executor.spin_once(timeout_sec=0.1)
+        except BaseException as exc:   # the process stops and raises it, as it would on its main thread
+            thread.error = exc
+            stop.append(True)
+        finally:
+            executor.remove_node(node)
+            executor.shutdown()
+
+    thread = threading.Thread(target=spin, name=f'{node.get_name()}_own_thread', daemon=True)
+    thread.error = None
+    thread.start()
+    return thread
