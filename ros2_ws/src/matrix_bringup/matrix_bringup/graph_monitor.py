@@ -22,6 +22,7 @@ import time
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from matrix_msgs.msg import HomographyStamped, TrackArray
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, Image
 from std_msgs.msg import Header
@@ -151,7 +152,7 @@ def main(argv=None) -> int:
     try:
         while rclpy.ok() and not node.done:
             executor.spin_once(timeout_sec=0.2)
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, ExternalShutdownException):   # SIGINT, or SIGTERM through rclpy's handler
         node.finish()
     scored = getattr(node, 'scored', 0)
     executor.shutdown()

@@ -56,3 +56,19 @@ def test_a_frame_is_done_only_when_every_part_arrived_and_a_late_one_is_named(no
     warnings = [line for line in out.splitlines() if 'not done' in line]
     assert len(warnings) == 1 and 'frame t=1.000 s' in warnings[0], out
     assert warnings[0].endswith('waiting for calib/D2'), out
+
+
+def test_a_monitor_stopped_by_sigterm_writes_its_summary_without_a_traceback(node_executable, tmp_path):
+    # a benchmark or a launch stops the monitor while it still waits: it says what it saw, no traceback
+    monitor = start_node(node_executable('matrix_bringup', 'graph_monitor'), 'views:=[D1]', 'expected_frames:=5',
+                         f'out_dir:={tmp_path}')
+    rclpy.init()
+    node = Node('referee_stop_test')
+    try:
+        assert spin_until(node, lambda: 'graph_monitor' in node.get_node_names(), [monitor], 60)
+    finally:
+        node.destroy_node()
+        rclpy.shutdown()
+    out = stop(monitor)
+    assert monitor.returncode == 1, out   # it could score nothing: no frame came
+    assert 'Traceback' not in out and (tmp_path / 'graph_summary.txt').is_file(), out
