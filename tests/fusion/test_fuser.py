@@ -135,6 +135,22 @@ def test_gaps_reset_state(sequence, model):
     assert fuser.process(3.0, views).resets == ['temporal', 'tracker']   # time went back (bag restarted)
 
 
+def test_a_failed_prepare_next_restarts_the_temporal_state_and_says_so(sequence, model, monkeypatch):
+    net, bev = model
+    dataset = open_dataset(sequence)
+    fuser = BevFuser(FuseSettings(area=list(dataset.area)), net, bev)
+    views = {v: _from_camera_info(dataset, v, dataset.frames[0]) for v in dataset.views}
+    fuser.process(1.0, views)
+
+    def fail(result):
+        raise RuntimeError('out of memory')
+    monkeypatch.setattr(fuser.runner.network, 'prepare_next', fail)
+    fuser.prepare_next()   # the node goes on: no error escapes, the carried features are forgotten
+    assert fuser.runner.previous is None
+    assert fuser.process(1.5, views).resets == ['temporal']   # the next frame reports it (log, /diagnostics)
+    assert fuser.process(2.0, views).resets == []
+
+
 def test_settings_validate():
     with pytest.raises(ValueError, match='input_kind'):
         FuseSettings(input_kind='pose')

@@ -80,6 +80,7 @@ class BevFuser:
         self.input_size = (bev_settings.image_width, bev_settings.image_height)
         self.runner = SequenceRunner(self.model, bev_settings, self.grid)
         self.tracker = BevTracker(settings.tracker_settings())
+        self._temporal_lost = False   # prepare_next failed: the next frame reports the temporal reset
         self.reset()
 
     def warm_up(self) -> float:
@@ -93,11 +94,13 @@ class BevFuser:
         """Compute now what the next frame needs of the last one (``SequenceRunner.prepare_next``): a live node
         calls it after publishing a frame, in time that would otherwise lie between its results and the next
         frame's. Without it the next :meth:`process` computes the same (the results do not change). An error here
-        restarts the temporal state, as one in :meth:`process_safely` does."""
+        restarts the temporal state, as one in :meth:`process_safely` does, and the next frame's ``resets`` say
+        so."""
         try:
             self.runner.prepare_next()
         except (ValueError, RuntimeError):
             self.runner.reset()
+            self._temporal_lost = True
 
     def reset(self) -> None:
         """Start fresh: no temporal features, no tracks (ids restart at 1)."""
@@ -109,13 +112,14 @@ class BevFuser:
 
     def _resets(self, stamp: float) -> list:
         s = self.settings
+        lost, self._temporal_lost = self._temporal_lost, False
         if self.last_stamp is None:
-            return []
+            return ['temporal'] if lost else []
         gap = stamp - self.last_stamp
         if gap <= 0 or gap > s.tracker_reset_gap_s:
             self.reset()
             return ['temporal', 'tracker']
-        if gap > s.temporal_reset_gap_s:
+        if gap > s.temporal_reset_gap_s or lost:
             self.runner.reset()
             return ['temporal']
         return []
