@@ -36,9 +36,11 @@ from matrix_core.register.features import resize, scaled_size, to_gray
 from matrix_core.register.fit import fit_homography
 from matrix_core.register.ground_mask import ground_pixels
 
-# Flow: a 15 px window on 5 pyramid levels (0-4) follows ~110 reduced px (450 full-res px) of motion, more
-# than a MATRIX drone moves in 0.5 s (up to ~240 full-res px); the last step's motion predicts the next.
-FLOW_WINDOW, FLOW_LEVELS = (15, 15), 4
+# Flow: an 11 px window on 5 pyramid levels (0-4) follows ~80 reduced px (320 full-res px) of motion, more
+# than a MATRIX drone moves in 0.5 s (up to ~240 full-res px); the last step's motion predicts the next. The
+# step only predicts the refinement's warp: 11 px instead of 15 (half the pixels per corner) registered the same
+# frames as exactly (README "Registration that tracks", stop 41).
+FLOW_WINDOW, FLOW_LEVELS = (11, 11), 4
 # Refinement: the residual after the warp is about a pixel; a small window keeps the local planar model. Its
 # side in flow-image pixels (the ground it covers); in refinement-image pixels it is this times refine_scale /
 # scale, rounded down to odd: 19 px at 960x540 (measured against 13-21 px on simulated complex seeds 3 and 11,
@@ -51,6 +53,9 @@ LK_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.01)
 # A corner is kept when tracking it back lands within this many pixels (of the image tracked in) of where it
 # started.
 FORWARD_BACKWARD_PX = 0.1
+# The flow step only predicts (the refinement against the anchor, checked both ways, decides): its corners are
+# tracked forward only and its robust fit rejects the bad ones; the backward pass was half the step's CPU time.
+FLOW_BACKWARD_CHECK = False
 # The refinement is repeated from its own result while its inliers still move by more than this (full-resolution
 # px, median) from where the warp put them, at most REFINE_PASSES times: one pass corrects a prediction a pixel
 # off, but a flow step 6 full-res px off (simulated complex seed 3, D2 frame 94) ended 6.5 px off after one
@@ -135,12 +140,15 @@ class FlowStep:
     reason: str = ''
 
 
-def _track(a: np.ndarray, b: np.ndarray, pa: np.ndarray, guess, window, levels) -> tuple:
+def _track(a: np.ndarray, b: np.ndarray, pa: np.ndarray, guess, window, levels, backward: bool = True) -> tuple:
     """LK of (N, 1, 2) ``pa`` from image ``a`` into ``b`` (starting at ``guess`` if given) and back:
-    ((N, 1, 2) positions in ``b``, (N,) bool tracked both ways and back within FORWARD_BACKWARD_PX)."""
+    ((N, 1, 2) positions in ``b``, (N,) bool tracked both ways and back within FORWARD_BACKWARD_PX; with
+    ``backward`` false: tracked forward)."""
     flags = cv2.OPTFLOW_USE_INITIAL_FLOW if guess is not None else 0
     pb, ok, _ = cv2.calcOpticalFlowPyrLK(a, b, pa, guess, winSize=window, maxLevel=levels, criteria=LK_CRITERIA,
                                          flags=flags)
+    if not backward:
+        return pb, ok.ravel().astype(bool)
     back, ok_back, _ = cv2.calcOpticalFlowPyrLK(b, a, pb, pa.copy(), winSize=window, maxLevel=levels,
                                                 criteria=LK_CRITERIA, flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
     fb = np.linalg.norm((back - pa).reshape(-1, 2), axis=1)
@@ -212,7 +220,8 @@ class FlowTracker:
         guess = None
         if state.prev_H_cur is not None:  # constant motion: start where the last step would take the corners
             guess = cv2.perspectiveTransform(state.corners, S @ np.linalg.inv(state.prev_H_cur) @ F)
-        cur, good = _track(state.images.flow, images.flow, state.corners, guess, FLOW_WINDOW, FLOW_LEVELS)
+        cur, good = _track(state.images.flow, images.flow, state.corners, guess, FLOW_WINDOW, FLOW_LEVELS,
+                           FLOW_BACKWARD_CHECK)
         flow = fit_homography(apply_homography(F, cur.reshape(-1, 2)[good]),
                               apply_homography(F, state.corners.reshape(-1, 2)[good]), self.estimator,
                               self.threshold_px, seed=self.seed)
