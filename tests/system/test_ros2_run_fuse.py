@@ -26,6 +26,9 @@ def test_fuse_started_with_ros2_run_feeds_another_process_and_takes_live_paramet
     # transient local, as the graph's observers: it gets the tracks whenever it matched
     echo = ros_helpers.start_ros2('topic', 'echo', '--no-daemon', '--once', '--qos-durability', 'transient_local',
                                   '--qos-reliability', 'reliable', '/tracks', 'matrix_msgs/msg/TrackArray')
+    # fuse builds RViz markers only while someone subscribes (it does here before the first frame is fused)
+    markers = ros_helpers.start_ros2('topic', 'echo', '--no-daemon', '--once', '--qos-reliability', 'reliable',
+                                     '/markers', 'visualization_msgs/msg/MarkerArray')
     topics = ','.join(BagFacts.read(str(sim / 'bag'), VIEWS).topics)
     player = ros_helpers.start_ros2('run', 'matrix_ros', 'bag_player', '--ros-args', '-p', f'bag:={sim / "bag"}',
                                     '-p', f'topics:=[{topics}]', '-p', 'wait_for_subscribers:=1',
@@ -39,6 +42,8 @@ def test_fuse_started_with_ros2_run_feeds_another_process_and_takes_live_paramet
         echoed = ros_helpers.finish(echo, timeout_s=60)
         assert player.returncode == 0 and 'played 2 frames' in played, played[-3000:]
         assert echo.returncode == 0 and 'frame_id: world' in echoed and 'tracks:' in echoed, echoed[-3000:]
+        echoed = ros_helpers.finish(markers, timeout_s=60)
+        assert markers.returncode == 0 and 'ns: tracks' in echoed and 'ns: track_ids' in echoed, echoed[-3000:]
 
         assert '/fuse' in ros_helpers.ros2_graph('node', 'list').stdout.split()
         get = ros_helpers.ros2_graph('param', 'get', '/fuse', 'tracker_reset_gap_s').stdout
@@ -53,7 +58,7 @@ def test_fuse_started_with_ros2_run_feeds_another_process_and_takes_live_paramet
         shown = ros_helpers.ros2('interface', 'show', 'matrix_msgs/msg/TrackArray').stdout
         assert 'Track[] tracks' in shown, shown
     finally:
-        fused, *_ = ros_helpers.interrupt_all([fuse, echo, player])
+        fused, *_ = ros_helpers.interrupt_all([fuse, echo, markers, player])
     assert 'published 2 frames' in fused and 'parameters changed: tracker_reset_gap_s=2.5' in fused, fused[-3000:]
     assert 'Traceback' not in fused, fused[-3000:]
 

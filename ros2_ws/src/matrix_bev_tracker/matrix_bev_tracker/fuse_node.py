@@ -1,18 +1,17 @@
 """``fuse``: fuses N drones' images in the bird's-eye view, detects and tracks people, publishes the result.
 
 Per view ``V`` in ``views``: the image (``image_topic`` Image and/or ``compressed_topic`` CompressedImage, see
-``image_kind``) and the frame's geometry, ``homography_topic`` (register's registration; a failed or unusable
-one, or a confidence below ``min_confidence``, makes the view missing) or ``camera_info_topic`` (CameraInfo
-``p = K [R | t]`` from calib or a bag's ground truth), per ``input_kind``; relative patterns
-(``matrix_core.topics``); images once the geometry has a publisher (``matrix_ros.connect``), the geometry with
-``geometry_qos`` (default history: also what a drone published before it matched this node).
-``dropped_topic``: a drone's notice (std_msgs/Header) that ``link_sender`` did not send a frame stands in for its image.
-Messages are grouped by stamp (``matrix_core.sync``); a frame is fused when every view arrived or
-``sync_timeout`` wall seconds after its first message (a stopped drone never stalls the graph), by
-``matrix_core.fusion`` (``view_inputs``, ``fuser.BevFuser``). Every fused frame publishes (``matrix_ros.
-fusion_messages``) tracks, detections (id 0), RViz markers, the BEV heatmap, ``/diagnostics`` and per drone the
-tracks' image boxes (``matrix_ros.image_outputs``; optionally an overlay image). Bad input is
-logged and the view counts as missing. ``~/reset`` (std_srvs/Trigger) starts fresh, and so does the node when
+``image_kind``) and the frame's geometry, ``homography_topic`` (register's registration; a failed or unusable one, or
+a confidence below ``min_confidence``, makes the view missing) or ``camera_info_topic`` (CameraInfo ``p = K [R | t]``
+from calib or a bag's ground truth), per ``input_kind``; relative patterns (``matrix_core.topics``); images once the
+geometry has a publisher (``matrix_ros.connect``), the geometry with ``geometry_qos`` (default history: also what a
+drone published before it matched this node). ``dropped_topic``: a drone's notice (std_msgs/Header) that
+``link_sender`` did not send a frame stands in for its image. Messages are grouped by stamp (``matrix_core.sync``); a
+frame is fused when every view arrived or ``sync_timeout`` wall seconds after its first message (a stopped drone never
+stalls the graph), by ``matrix_core.fusion`` (``view_inputs``, ``fuser.BevFuser``). Every fused frame publishes
+(``matrix_ros.fusion_messages``) tracks, detections (id 0), RViz markers (while subscribed), the BEV heatmap,
+``/diagnostics`` and per drone the tracks' image boxes (``matrix_ros.image_outputs``; optionally an overlay). Bad
+input is logged and the view counts as missing. ``~/reset`` (std_srvs/Trigger) starts fresh, and so does the node when
 stamps go back by more than ``tracker_reset_gap_s`` (a replay restarted).
 """
 
@@ -131,7 +130,8 @@ class FuseNode(Node):
         header = Header(stamp=seconds_to_stamp(frame.stamp), frame_id=s.world_frame)
         self.pubs['tracks'].publish(out.tracks_msg(header, result.tracks))
         self.pubs['detections'].publish(out.detections_msg(header, result.detections, s.frame_interval_s))
-        self.pubs['markers'].publish(out.markers_msg(header, result.tracks))
+        if self.pubs['markers'].get_subscription_count():   # for RViz: ~50 messages a frame, ~12 ms of CPU
+            self.pubs['markers'].publish(out.markers_msg(header, result.tracks))
         self.image_outputs.publish(header.stamp, frame, result.tracks)
         if 'heatmap' in self.pubs:
             self.pubs['heatmap'].publish(out.heatmap_msg(header, self.fuser.grid, result.heatmap))
