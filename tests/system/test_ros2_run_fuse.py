@@ -18,6 +18,16 @@ def test_fuse_started_with_ros2_run_feeds_another_process_and_takes_live_paramet
     assert cli(['simulate', '--config', 'simple', '--frames', '2', '--fast', '--bag', '--out', str(sim)]) == 0
     prefix = ros_helpers.ros2('pkg', 'prefix', 'matrix_bev_tracker').stdout.strip()
     params = f'{prefix}/share/matrix_bev_tracker/config/fuse.yaml'
+    # fuse builds RViz markers only while someone subscribes: this echo, in the graph before fuse starts (started
+    # beside fuse, the CLI was not yet matched when fuse had fused both frames of a loaded CI run)
+    markers = ros_helpers.start_ros2('topic', 'echo', '--no-daemon', '--once', '--qos-reliability', 'reliable',
+                                     '/markers', 'visualization_msgs/msg/MarkerArray')
+    try:
+        ros_helpers.wait_for(lambda: 'Subscription count: 1' in ros_helpers.ros2_graph('topic', 'info', '/markers').stdout,
+                             120, 'the /markers echo to subscribe')
+    except AssertionError:
+        ros_helpers.interrupt_all([markers])
+        raise
     # geometry: the bag's ground-truth CameraInfo (no calib or register needed to feed fuse)
     fuse = ros_helpers.start_ros2('run', 'matrix_bev_tracker', 'fuse', '--ros-args', '--params-file', params,
                                   '-p', f'views:=[{",".join(VIEWS)}]', '-p', 'input_kind:=camera_info',
@@ -26,9 +36,6 @@ def test_fuse_started_with_ros2_run_feeds_another_process_and_takes_live_paramet
     # transient local, as the graph's observers: it gets the tracks whenever it matched
     echo = ros_helpers.start_ros2('topic', 'echo', '--no-daemon', '--once', '--qos-durability', 'transient_local',
                                   '--qos-reliability', 'reliable', '/tracks', 'matrix_msgs/msg/TrackArray')
-    # fuse builds RViz markers only while someone subscribes (it does here before the first frame is fused)
-    markers = ros_helpers.start_ros2('topic', 'echo', '--no-daemon', '--once', '--qos-reliability', 'reliable',
-                                     '/markers', 'visualization_msgs/msg/MarkerArray')
     topics = ','.join(BagFacts.read(str(sim / 'bag'), VIEWS).topics)
     player = ros_helpers.start_ros2('run', 'matrix_ros', 'bag_player', '--ros-args', '-p', f'bag:={sim / "bag"}',
                                     '-p', f'topics:=[{topics}]', '-p', 'wait_for_subscribers:=1',
