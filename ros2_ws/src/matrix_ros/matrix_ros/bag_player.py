@@ -6,7 +6,8 @@ Messages with the same bag time form one frame. Two pacings:
 - ``rate``: frames follow the recorded timing scaled by ``rate`` (2.0 = twice as fast);
 - ``lockstep``: the next frame is published only after ``lockstep_count`` messages stamped with the
   current frame's time arrived on ``lockstep_topic`` (e.g. the fuse node's output), or after
-  ``lockstep_timeout`` seconds (logged), so evaluation is deterministic whatever the machine's speed.
+  ``lockstep_timeout`` seconds (logged), so evaluation is deterministic whatever the machine's speed; with
+  ``lockstep_window`` 2 once the frame before the current one is released (``matrix_ros.lockstep``).
   Before the first frame the player waits until ``lockstep_topic`` has a publisher; the lockstep
   subscription asks for ``lockstep_qos`` ``history`` (transient local), so an announcement published before
   the two sides matched still arrives (this workspace's publishers offer it, see ``matrix_ros.qos``).
@@ -31,8 +32,9 @@ from rosgraph_msgs.msg import Clock
 from matrix_core.bags.clock import read_sequence_clock
 from matrix_core.bags.salvage import BagDamaged, connections, raw_messages
 from matrix_ros.connect import SubscribersReady
-from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
+from matrix_ros.conversions import seconds_to_stamp
 from matrix_ros.executor import make_executor
+from matrix_ros.lockstep import LockstepWindow
 from matrix_ros.message_types import message_class
 from matrix_ros.params import parse_node_args, declare_settings
 from matrix_ros.player_settings import BagPlayerSettings
@@ -51,22 +53,17 @@ class BagPlayer(Node):
         qos = publisher_qos(s.qos)
         self.pubs = {t: self.create_publisher(message_class(msgtype), t, qos) for t, msgtype in self.topics.items()}
         self.clock_pub = self.create_publisher(Clock, '/clock', 10)
-        self.released = {}  # stamp (s) -> lockstep messages seen
-        self.timed_out = []  # stamps whose lockstep release never came
         self.skipped = 0     # frames due (start_at) before the player was ready
         self.lockstep_sub, self.spinner = None, make_executor()
         self.spinner.add_node(self)
+        self.lockstep = LockstepWindow(s.lockstep_window, s.lockstep_count, s.lockstep_timeout, self._spin_for,
+                                       self.get_logger().warning)
         if s.lockstep:
             self.lockstep_sub = self.create_subscription(message_class(s.lockstep_type), s.lockstep_topic,
-                                                         self._on_lockstep, qos_by_name(s.lockstep_qos, 50))
+                                                         self.lockstep.on_message, qos_by_name(s.lockstep_qos, 50))
         self.get_logger().info(f'playing {s.bag}: {len(self.pubs)} topics, '
                                + (f'lockstep on {s.lockstep_topic}' if s.lockstep else f'rate {s.rate}')
                                + f'; sequence clock: {self.sequence_clock.describe()}')
-
-    def _on_lockstep(self, msg):
-        header = msg if hasattr(msg, 'frame_id') else msg.header  # a std_msgs/Header or a stamped message
-        stamp = round(stamp_to_seconds(header.stamp), 6)
-        self.released[stamp] = self.released.get(stamp, 0) + 1
 
     def _spin_for(self, seconds: float, until=lambda: False):
         deadline = time.monotonic() + seconds
@@ -124,22 +121,17 @@ class BagPlayer(Node):
                 self.pubs[topic].publish(raw)
             count += 1
             if s.lockstep:
-                stamp = round(time_ns * 1e-9, 6)
-                self._spin_for(s.lockstep_timeout, lambda: self.released.get(stamp, 0) >= s.lockstep_count)
-                if self.released.get(stamp, 0) < s.lockstep_count:
-                    self.timed_out.append(stamp)
-                    self.get_logger().warning(
-                        f'lockstep: only {self.released.get(stamp, 0)}/{s.lockstep_count} messages on '
-                        f'{s.lockstep_topic} for frame {self.sequence_clock.frame(stamp)} (t={stamp:.3f} s) after '
-                        f'{s.lockstep_timeout} s; going on')
+                self.lockstep.sent(time_ns * 1e-9, f'frame {self.sequence_clock.frame_ns(time_ns)} '
+                                   f'(t={time_ns * 1e-9:.3f} s) on {s.lockstep_topic}')
             previous_ns = time_ns
+        self.lockstep.finish()
         # Reliable subscribers must get the last frame before the process exits.
         for pub in [*self.pubs.values(), self.clock_pub]:
             pub.wait_for_all_acked(Duration(seconds=5.0))
         self.get_logger().info(f'played {count} frames'
                                + (f' up to frame {self.sequence_clock.frame_ns(previous_ns)} '
                                   f'(t={previous_ns * 1e-9:.3f} s)' if previous_ns else '')
-                               + (f'; lockstep timed out for {len(self.timed_out)} of them' if self.timed_out else '')
+                               + (f'; lockstep timed out for {len(self.lockstep.timed_out)} of them' if self.lockstep.timed_out else '')
                                + (f'; skipped {self.skipped} frames due before it was ready' if self.skipped else ''))
         return count
 
@@ -158,7 +150,7 @@ def main(argv=None) -> int:
         node.spinner.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
-    return 1 if not played else (4 if node.damage else 3 if node.timed_out else 0)
+    return 1 if not played else (4 if node.damage else 3 if node.lockstep.timed_out else 0)
 
 
 if __name__ == '__main__':

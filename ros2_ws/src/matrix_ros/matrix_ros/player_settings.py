@@ -15,6 +15,10 @@ class BagPlayerSettings:
     lockstep_type: str = field(default='', metadata={'help': 'message type of lockstep_topic, e.g. matrix_msgs/msg/TrackArray'})
     lockstep_count: int = field(default=1, metadata={'help': 'messages per frame to wait for on lockstep_topic'})
     lockstep_timeout: float = field(default=30.0, metadata={'help': 'seconds to wait before going on anyway'})
+    lockstep_window: int = field(default=1, metadata={
+        'help': 'lockstep: frames out before the oldest of them must be released; 1: one frame at a time, 2: the '
+                'next frame leaves while the last is finished (the drones register it while fuse fuses the last; '
+                'every stage still gets every frame, in order)'})
     lockstep_qos: str = field(default='history', metadata={
         'help': 'QoS of the lockstep subscription: history (also messages published before matching; needs a '
                 'transient-local publisher, as all of this workspace\'s are) or reliable (any publisher)'})
@@ -28,8 +32,8 @@ class BagPlayerSettings:
     exit_when_done: bool = field(default=True, metadata={'help': 'exit after the last frame'})
 
     def __post_init__(self):
-        if self.rate <= 0 or self.lockstep_timeout <= 0 or self.lockstep_count < 1:
-            raise ValueError('rate and lockstep_timeout must be positive, lockstep_count >= 1')
+        if self.rate <= 0 or self.lockstep_timeout <= 0 or self.lockstep_count < 1 or self.lockstep_window < 1:
+            raise ValueError('rate and lockstep_timeout must be positive, lockstep_count and lockstep_window >= 1')
         if self.lockstep and not (self.lockstep_topic and self.lockstep_type):
             raise ValueError('lockstep needs lockstep_topic and lockstep_type')
         qos_by_name(self.qos)

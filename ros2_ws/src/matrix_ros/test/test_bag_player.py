@@ -81,30 +81,47 @@ def test_player_reads_the_clock_stored_in_the_bag(matrix_sample, node_executable
     assert 'sequence clock: first stamp 3 s, 0.25 s per frame' in out and 'played 5 frames up to frame 4 ' in out, out
 
 
-def test_lockstep_waits_for_the_graph(sample_bag, node_executable):
-    arrivals = []
+def _lockstep_run(node_executable, bag, *params):
+    """Play ``bag`` in lockstep on /ack, acknowledging each frame 0.8 s after it arrived: (arrival times, ack
+    times, the player's exit time, its output)."""
+    arrivals, acks = [], []
     rclpy.init()
     node = rclpy.create_node('lockstep_test')
     ack = node.create_publisher(PointStamped, '/ack', publisher_qos())   # as the graph's nodes offer it
     node.create_subscription(CompressedImage, '/D3/image/compressed', lambda m: None, 10)
     node.create_subscription(CameraInfo, '/D3/ground_truth/camera_info',
                              lambda m: arrivals.append((time.monotonic(), m.header)), 10)
-    player = _player(node_executable, sample_bag, 'lockstep:=true', 'lockstep_topic:=/ack',
-                     'lockstep_type:=geometry_msgs/msg/PointStamped', 'lockstep_timeout:=20.0')
-    acked = 0
+    player = _player(node_executable, bag, 'lockstep:=true', 'lockstep_topic:=/ack',
+                     'lockstep_type:=geometry_msgs/msg/PointStamped', 'lockstep_timeout:=20.0', *params)
     deadline = time.monotonic() + 90
     while time.monotonic() < deadline and player.poll() is None:
         rclpy.spin_once(node, timeout_sec=0.05)
-        if acked < len(arrivals) and time.monotonic() - arrivals[acked][0] > 0.8:
-            ack.publish(PointStamped(header=arrivals[acked][1]))  # "processed" 0.8 s after arrival
-            acked += 1
+        if len(acks) < len(arrivals) and time.monotonic() - arrivals[len(acks)][0] > 0.8:
+            ack.publish(PointStamped(header=arrivals[len(acks)][1]))  # "processed" 0.8 s after arrival
+            acks.append(time.monotonic())
+    exited = time.monotonic()
     out = finish(player, 5)
     node.destroy_node()
     rclpy.shutdown()
-    assert player.returncode == 0 and len(arrivals) == 5, out
-    gaps = np.diff([t for t, _ in arrivals])
-    assert np.all(gaps >= 0.75), gaps  # each frame waited for the acknowledgement of the previous one
+    assert player.returncode == 0 and len(arrivals) == 5 and len(acks) == 5, out
     assert 'lockstep: only' not in out
+    return np.array([t for t, _ in arrivals]), np.array(acks), exited, out
+
+
+def test_lockstep_waits_for_the_graph(sample_bag, node_executable):
+    arrivals, _, _, _ = _lockstep_run(node_executable, sample_bag)
+    gaps = np.diff(arrivals)
+    assert np.all(gaps >= 0.75), gaps  # each frame waited for the acknowledgement of the previous one
+
+
+def test_lockstep_window_keeps_two_frames_out(sample_bag, node_executable):
+    """lockstep_window 2: frame k + 1 leaves before frame k is acknowledged, frame k + 2 only after; the player
+    ends only once the last frame is acknowledged."""
+    arrivals, acks, exited, out = _lockstep_run(node_executable, sample_bag, 'lockstep_window:=2')
+    assert arrivals[1] - arrivals[0] < 0.5, arrivals - arrivals[0]   # not waiting for frame 0's ack (0.8 s)
+    assert np.all(arrivals[2:] >= acks[:-2]), (arrivals - arrivals[0], acks - arrivals[0])
+    assert np.all(arrivals[2:] - acks[:-2] < 0.5), (arrivals - arrivals[0], acks - arrivals[0])   # and soon after
+    assert exited >= acks[-1], out
 
 
 def test_start_at_releases_frames_together_and_skips_frames_due_before_ready(sample_bag, node_executable):
