@@ -241,6 +241,8 @@ def main() -> int:
                    "config/register.yaml, the live graph's: mode track); e.g. one with mode: reference to compare")
     p.add_argument('--fuse_params', default='', help="fuse's ROS parameter file (default: matrix_bev_tracker/config/"
                    "fuse.yaml); e.g. one with threads: 2")
+    p.add_argument('--lockstep_window', type=int, default=GraphSettings().lockstep_window,
+                   help='frames out at once in lockstep (GraphSettings.lockstep_window; 1 = one at a time)')
     p.add_argument('--lockstep_timeout', type=float, default=300.0,
                    help='seconds the player waits for a frame to be done before going on (a WARNING line)')
     p.add_argument('--checkpoint', default='', help='BEV checkpoint (default: the fuse node default)')
@@ -272,6 +274,7 @@ def main() -> int:
                     drone_process=not args.separate, checkpoint=args.checkpoint, monitor=True,
                     monitor_out=str(out / 'run' / 'monitor'), record=str(out / 'run' / 'recording'),
                     lockstep=mode == 'lockstep', lockstep_timeout=args.lockstep_timeout, rate=period * args.hz,
+                    lockstep_window=args.lockstep_window,
                     dds_profile=args.dds_profile, register_params=args.register_params,
                     fuse_params=args.fuse_params, drone_niceness=args.drone_niceness)
                 facts = BagFacts.read(settings.bag, settings.views)

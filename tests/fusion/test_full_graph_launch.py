@@ -108,6 +108,7 @@ def test_monitor_paces_lockstep_on_every_stage(settings):
     player = nodes[-1].parameters
     # raw images: the monitor reads them too (drone and fuse read them; separate calib and register: one more)
     assert (player['lockstep_topic'], player['wait_for_subscribers']) == ('/graph_monitor/frame_done', 3)
+    assert player['lockstep_window'] == 2   # the drones register the next frame while fuse fuses the last
     separate = graph_nodes(settings(drones_per_process=0, monitor=True, views=['D1', 'D5'], drone_process=False),
                            BagFacts(compressed=False, frames=7, has_ground_truth=True))
     assert [n.label for n in separate][:2] == ['calib', 'register'] and separate[-1].parameters['wait_for_subscribers'] == 4
