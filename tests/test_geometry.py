@@ -66,3 +66,23 @@ def test_bev_grid_cells_and_homography():
     assert grid.contains([[1, -1], [31, -1]]).tolist() == [True, False]
     with pytest.raises(ValueError):
         BevGrid(0, 0, 0, 1)
+
+
+def test_quaternions_match_scipy_both_ways():
+    """geometry.quaternion (numpy, ROS order x y z w) agrees with scipy's Rotation, also near 180 degrees
+    where the trace is about -1 and the other branches of Shepperd's method are taken."""
+    from scipy.spatial.transform import Rotation
+
+    from matrix_core.geometry.quaternion import matrix_from_quaternion, quaternion_from_matrix
+
+    rotations = Rotation.random(200, random_state=3)
+    flips = Rotation.from_rotvec(np.pi * np.eye(3) * (1 - 1e-9))   # 180 deg about each axis
+    for r in [*rotations, *flips, Rotation.identity()]:
+        q = quaternion_from_matrix(r.as_matrix())
+        expected = r.as_quat()
+        expected = -expected if expected[3] < 0 else expected
+        np.testing.assert_allclose(q, expected, atol=1e-9)
+        assert q[3] >= 0
+        np.testing.assert_allclose(matrix_from_quaternion(2.0 * r.as_quat()), r.as_matrix(), atol=1e-12)
+    with pytest.raises(ValueError, match='quaternion'):
+        matrix_from_quaternion([0, 0, 0, 0])

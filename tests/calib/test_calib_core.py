@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from matrix_core.calib.assignment import assign_piece
+from matrix_core.calib.assignment import assign_piece, correlate_valid
 from matrix_core.calib.corner_tracking import track_corners
 from matrix_core.calib.detection import find_pieces
 from matrix_core.calib.drone_calibrator import FAILED, OK, STALE, DroneCalibrator
@@ -84,6 +84,17 @@ def test_ground_motion_of_both_matchers_predicts_the_boards(dataset, scene):
         assert np.median(err[seen]) < 1.0, (matcher, np.median(err[seen]))
     with pytest.raises(ValueError, match="matcher must be one of"):
         motion.homography(a, b, 'flann')
+
+
+def test_the_valid_correlation_is_scipys():
+    """correlate_valid (the board-pattern correlation of the assignment) equals scipy's correlate2d 'valid'."""
+    from scipy.signal import correlate2d
+
+    rng = np.random.default_rng(0)
+    values, template = rng.normal(size=(27, 31)), np.where(rng.random((20, 20)) < 0.5, -1.0, 1.0)
+    np.testing.assert_allclose(correlate_valid(values, template), correlate2d(values, template, mode='valid'),
+                               rtol=1e-12, atol=1e-12)
+    assert correlate_valid(values, template).shape == (8, 12)
 
 
 def test_rectified_search_finds_true_corners_and_assignment_names_them(dataset, scene):

@@ -18,9 +18,9 @@ Conventions (README, "Conventions"):
 
 import cv2
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from matrix_core.geometry.camera import Camera, pose_matrix
+from matrix_core.geometry.quaternion import matrix_from_quaternion, quaternion_from_matrix
 from matrix_core.register.registration import (STATUS_FAILED, STATUS_OK, STATUS_UNUSABLE, Registration,
                                                RegistrationError, check_homography)
 
@@ -146,14 +146,14 @@ def camera_from_camera_info(msg) -> Camera:
 
 def pose_values(world_T_cam: np.ndarray) -> tuple:
     """(4, 4) pose -> ((x, y, z) position, (x, y, z, w) quaternion) for geometry_msgs/Pose."""
-    x, y, z, w = Rotation.from_matrix(world_T_cam[:3, :3]).as_quat()
+    x, y, z, w = quaternion_from_matrix(world_T_cam[:3, :3])
     return tuple(float(v) for v in world_T_cam[:3, 3]), (float(x), float(y), float(z), float(w))
 
 
 def pose_matrix_from_msg(pose) -> np.ndarray:
     """geometry_msgs/Pose -> (4, 4) transform (``world_T_cam`` for a camera pose)."""
     q, p = pose.orientation, pose.position
-    return pose_matrix(Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix(), [p.x, p.y, p.z])
+    return pose_matrix(matrix_from_quaternion([q.x, q.y, q.z, q.w]), [p.x, p.y, p.z])
 
 
 # --- registrations ------------------------------------------------------------------------------------
