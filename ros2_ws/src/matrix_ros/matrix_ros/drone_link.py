@@ -13,9 +13,11 @@ calib may run on its own thread (:meth:`DroneLink.own_thread`, calib's ``thread_
 queues each call and goes on with the next image, and calib's thread, niced further, calibrates when the cores
 have time. On a computer shared by several drones the registrations, which fuse waits for, then go first and
 calibration (which nothing in the graph waits for) fills the time left (measured: README "Running the whole
-graph", stop 40). At most ``MAX_WAITING_IMAGES`` images wait for calib; when one more comes the oldest is
-dropped and logged (calib then warns of its registration without an image): under a load the computer cannot
-carry, calib skips frames instead of falling ever further behind.
+graph", stop 40). At most ``MAX_WAITING_IMAGES`` images of each drone wait for calib; when one more comes the
+drone's oldest is dropped and logged (calib then warns of its registration without an image): under a load the
+computer cannot carry, calib skips frames instead of falling ever further behind. The limit is per drone: a
+process hosting 8 drones (``drones_per_process``) in a lockstep replay with two frames out has 16 images
+waiting at times, none of them late.
 """
 
 import collections
@@ -26,7 +28,7 @@ from typing import Callable
 
 from matrix_ros.conversions import gray_image_from_msg, msg_to_image, stamp_to_seconds
 
-MAX_WAITING_IMAGES = 8   # 4 s of a 2 Hz drone: a passing backlog; about 25 MB of 1080p images and messages
+MAX_WAITING_IMAGES = 8   # per drone, 4 s at 2 Hz: a passing backlog; about 25 MB of 1080p images and messages
 
 
 @dataclass(frozen=True)
@@ -76,7 +78,7 @@ class DroneLink:
             return fn(view, msg, *args)
         with self._lock:
             self._queue.append((fn, view, msg, args))
-            images = [item for item in self._queue if item[0] == self._on_image]
+            images = [item for item in self._queue if item[0] == self._on_image and item[1] == view]
             if len(images) > MAX_WAITING_IMAGES:
                 self._queue.remove(images[0])
                 self._node.get_logger().warning(

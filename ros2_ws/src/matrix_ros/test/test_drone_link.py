@@ -1,6 +1,6 @@
 """The in-process hand-over from register to calib (``matrix_ros.drone_link``) when calib has a thread of its
-own: the calls wait in order until calib's thread makes them, the oldest image is dropped (logged) when more
-than ``MAX_WAITING_IMAGES`` wait, ``received`` is when register handed an image over, and a process spun by
+own: the calls wait in order until calib's thread makes them, a drone's oldest image is dropped (logged) when
+more than ``MAX_WAITING_IMAGES`` of its images wait, ``received`` is when register handed an image over, and a process spun by
 ``spin_nodes`` makes every call still waiting before it exits. Real rclpy: guard conditions and executors."""
 
 import threading
@@ -78,6 +78,30 @@ def test_calls_wait_in_order_for_calibs_thread_and_the_oldest_images_drop(node):
     assert all(c[3] == thread.ident for c in calls)   # all on calib's own thread
     for kind, t, received, _ in calls:   # an image's time is when register handed it over
         assert kind == 'registration' or received == pytest.approx(handed[int(t)], abs=0.01)
+
+
+def test_the_limit_of_waiting_images_is_per_drone(node):
+    """A process of several drones (drones_per_process) queues MAX_WAITING_IMAGES images of EACH before any
+    is dropped: a lockstep replay with two frames out has 2 per drone waiting, 16 in an 8-drone process."""
+    calls = []
+    link = _linked(calls)
+    own = link.own_thread(node, 3)
+    views = [f'D{i}' for i in range(1, 9)]
+    for k in range(MAX_WAITING_IMAGES):
+        for view in views:
+            link.image(view, _image(float(k)), object())
+    assert own.waiting() == MAX_WAITING_IMAGES * len(views)   # none dropped
+    link.image('D3', _image(99.0), object())
+    assert own.waiting() == MAX_WAITING_IMAGES * len(views)   # D3's oldest made room for its newest
+    stop = []
+    thread = _spin_in_thread(node, own, stop)
+    end = time.monotonic() + 20
+    while own.waiting() and time.monotonic() < end:
+        time.sleep(0.01)
+    stop.append(True)
+    thread.join(20)
+    made = sorted(c[1] for c in calls)
+    assert len(made) == MAX_WAITING_IMAGES * len(views) and made.count(0.0) == len(views) - 1 and 99.0 in made
 
 
 def test_the_own_thread_makes_the_calls_still_waiting_when_it_stops(node):
