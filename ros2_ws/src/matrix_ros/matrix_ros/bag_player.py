@@ -125,13 +125,14 @@ class BagPlayer(Node):
                                    f'(t={time_ns * 1e-9:.3f} s) on {s.lockstep_topic}')
             previous_ns = time_ns
         self.lockstep.finish()
+        timed_out = self.lockstep.timed_out
         # Reliable subscribers must get the last frame before the process exits.
         for pub in [*self.pubs.values(), self.clock_pub]:
             pub.wait_for_all_acked(Duration(seconds=5.0))
         self.get_logger().info(f'played {count} frames'
                                + (f' up to frame {self.sequence_clock.frame_ns(previous_ns)} '
                                   f'(t={previous_ns * 1e-9:.3f} s)' if previous_ns else '')
-                               + (f'; lockstep timed out for {len(self.lockstep.timed_out)} of them' if self.lockstep.timed_out else '')
+                               + (f'; lockstep timed out for {len(timed_out)} of them' if timed_out else '')
                                + (f'; skipped {self.skipped} frames due before it was ready' if self.skipped else ''))
         return count
 

@@ -33,6 +33,18 @@ def _linked(calls: list) -> DroneLink:
         lambda view, msg: calls.append(('registration', stamp_to_seconds(msg.stamp), None, threading.get_ident())))
 
 
+def _drain(node, own):
+    """Spin calib's own thread until no call waits (at most 20 s), stop it; returns the joined thread."""
+    stop = []
+    thread = _spin_in_thread(node, own, stop)
+    end = time.monotonic() + 20
+    while own.waiting() and time.monotonic() < end:
+        time.sleep(0.01)
+    stop.append(True)
+    thread.join(20)
+    return thread
+
+
 @pytest.fixture
 def node():
     rclpy.init()
@@ -64,13 +76,7 @@ def test_calls_wait_in_order_for_calibs_thread_and_the_oldest_images_drop(node):
         link.image('D1', _image(float(k)), object())
         link.registration('D1', _registration(float(k)))
     assert calls == [] and own.waiting() == 2 * frames - 2   # nothing made yet; the 2 oldest images dropped
-    stop = []
-    thread = _spin_in_thread(node, own, stop)
-    end = time.monotonic() + 20
-    while own.waiting() and time.monotonic() < end:
-        time.sleep(0.01)
-    stop.append(True)
-    thread.join(20)
+    thread = _drain(node, own)
     assert not thread.is_alive() and thread.error is None
     made = [c[:2] for c in calls]
     assert made == [c for k in range(frames) for c in ([('image', float(k))] if k >= 2 else [])
@@ -93,13 +99,7 @@ def test_the_limit_of_waiting_images_is_per_drone(node):
     assert own.waiting() == MAX_WAITING_IMAGES * len(views)   # none dropped
     link.image('D3', _image(99.0), object())
     assert own.waiting() == MAX_WAITING_IMAGES * len(views)   # D3's oldest made room for its newest
-    stop = []
-    thread = _spin_in_thread(node, own, stop)
-    end = time.monotonic() + 20
-    while own.waiting() and time.monotonic() < end:
-        time.sleep(0.01)
-    stop.append(True)
-    thread.join(20)
+    thread = _drain(node, own)
     made = sorted(c[1] for c in calls)
     assert len(made) == MAX_WAITING_IMAGES * len(views) and made.count(0.0) == len(views) - 1 and 99.0 in made
 
