@@ -1,6 +1,8 @@
 """Live fusion core on a real simulated sequence: frame by frame it must give exactly what the offline
 evaluation (BevFrames + run_frames + BevTracker) gives on the same frames, and survive bad views."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import torch
@@ -160,6 +162,17 @@ def test_settings_validate():
         FuseSettings(device='cuda')
     s = FuseSettings(gate_m=2.0, score_threshold=0.4)
     assert s.tracker_settings().gate_m == 2.0 and s.decode_overrides() == {'score_threshold': 0.4}
+
+
+def test_checkpoint_names_a_path_or_a_shipped_file(tmp_path, monkeypatch):
+    assert FuseSettings().checkpoint_path() == shipped_checkpoint()
+    assert FuseSettings(checkpoint='detector_seed0.pt').checkpoint_path() == shipped_checkpoint('detector_seed0.pt')
+    monkeypatch.chdir(tmp_path)   # a file of that name here is taken first: a path is a path
+    (tmp_path / 'detector_seed0.pt').write_bytes(b'x')
+    assert FuseSettings(checkpoint='detector_seed0.pt').checkpoint_path() == Path('detector_seed0.pt')
+    # neither here nor shipped: the path as given, so that loading it names it
+    assert FuseSettings(checkpoint='nothing.pt').checkpoint_path() == Path('nothing.pt')
+    assert FuseSettings(checkpoint='sub/detector_seed1.pt').checkpoint_path() == Path('sub/detector_seed1.pt')
 
 
 def test_reduced_jpeg_decode_gives_the_detections_of_the_full_decode(matrix_sample, model):

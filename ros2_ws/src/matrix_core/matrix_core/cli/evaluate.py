@@ -19,6 +19,7 @@ import json
 from pathlib import Path
 
 from matrix_core.fusion.image_boxes import ImageBoxSettings
+from matrix_core.fusion.settings import resolve_checkpoint
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 from matrix_core.tracking.settings import TrackerSettings
 
@@ -29,7 +30,8 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser('evaluate', help='metrics table + PNGs of a trained BEV model on a dataset',
                               description=__doc__)
     p.add_argument('dataset', help='MATRIX-format folder')
-    p.add_argument('--checkpoint', required=True, help='model checkpoint (.pt) written by train')
+    p.add_argument('--checkpoint', required=True, help='model checkpoint (.pt) written by train, or the name of '
+                   'one shipped in matrix_core/bev/checkpoints (e.g. detector_seed1.pt)')
     p.add_argument('--frames', type=int, nargs=2, metavar=('FIRST', 'LAST'), help='frame range (inclusive)')
     p.add_argument('--calibration', default='ground_truth', choices=sorted(CALIBRATION_SOURCES),
                    help='calibration source per frame (default: ground_truth)')
@@ -57,7 +59,7 @@ def run(args) -> int:
 
     torch.set_num_threads(1)
     overrides = {} if args.score_threshold is None else {'score_threshold': args.score_threshold}
-    model, settings = load_model(args.checkpoint, overrides)
+    model, settings = load_model(resolve_checkpoint(args.checkpoint), overrides)
     probe = BevFrames(args.dataset, settings, calibration=args.calibration, cache_images=False,
                       calibration_dir=args.calibration_dir)
     unknown = set(args.drop_views) - set(probe.views)

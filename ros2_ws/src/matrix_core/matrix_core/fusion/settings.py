@@ -21,6 +21,17 @@ def shipped_checkpoint(name: str = DEFAULT_CHECKPOINT) -> Path:
     return Path(__file__).resolve().parent.parent / 'bev' / 'checkpoints' / name
 
 
+def resolve_checkpoint(checkpoint: str) -> Path:
+    """The checkpoint file a setting names: a path, or the bare file name of a checkpoint shipped with the
+    package (``detector_tiny_seed0.pt``: no need to know where the package is installed); empty: the default."""
+    if not checkpoint:
+        return shipped_checkpoint()
+    path = Path(checkpoint)
+    if path.is_file() or path.parent != Path('.') or not shipped_checkpoint(checkpoint).is_file():
+        return path
+    return shipped_checkpoint(checkpoint)
+
+
 @dataclass
 class FuseSettings(TrackerSettings):
     """Everything the fusion of N views needs. Seconds, metres. ``frame_interval_s`` (from the tracker
@@ -47,7 +58,8 @@ class FuseSettings(TrackerSettings):
     min_confidence: float = field(default=0.0, metadata={
         'help': 'homographies with a lower registration confidence are treated as missing'})
     checkpoint: str = field(default='', metadata={
-        'help': 'BEV model checkpoint (.pt); empty: the shipped default matrix_core/bev/checkpoints/detector_seed1.pt'})
+        'help': 'BEV model checkpoint (.pt): a path or the name of one shipped in matrix_core/bev/checkpoints (e.g. '
+                'detector_tiny_seed0.pt, the faster detector); empty: the shipped default detector_seed1.pt'})
     device: str = field(default='cpu', metadata={'help': 'torch device (the BEV runner decodes on the CPU)'})
     threads: int = field(default=1, metadata={'help': 'torch and OpenCV CPU threads (1: one core, as benchmarked)'})
     area: list[float] = field(default_factory=lambda: list(MATRIX_AREA), metadata={
@@ -85,7 +97,7 @@ class FuseSettings(TrackerSettings):
         return pattern.format(view=view)
 
     def checkpoint_path(self) -> Path:
-        return Path(self.checkpoint) if self.checkpoint else shipped_checkpoint()
+        return resolve_checkpoint(self.checkpoint)
 
     def tracker_settings(self) -> TrackerSettings:
         return TrackerSettings(**{name: getattr(self, name) for name in TrackerSettings.__dataclass_fields__})
