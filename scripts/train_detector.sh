@@ -6,18 +6,21 @@
 #   matrix_core/bev/checkpoints/detector_seedN.pt, detector_seedN.log (per-epoch losses and validation),
 #   detector_seedN.history.json.
 # Usage: bash scripts/train_detector.sh 0 1   (data first: bash scripts/detector_data.sh)
+# Another recipe of bev/configs by CONFIG: CONFIG=detector_tiny bash scripts/train_detector.sh 0 1 writes
+# detector_tiny_seedN.* (the smaller network of issue 18, README "A faster detector").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/env.sh
 [ $# -ge 1 ] || { echo "usage: $0 SEED [SEED ...]" >&2; exit 2; }
 ckpt=ros2_ws/src/matrix_core/matrix_core/bev/checkpoints
+config=${CONFIG:-detector}
 pids=()
 for seed in "$@"; do
-  out="out/train/detector_seed$seed"
-  ( OMP_NUM_THREADS=1 PYTHONUNBUFFERED=1 matrix-tracker train --config detector --seed "$seed" --out "$out" --resume \
-      --export-from best --export "$ckpt/detector_seed$seed.pt" >> "$out.log" 2>> "$out.progress" \
-    && cp "$out.log" "$ckpt/detector_seed$seed.log" && cp "$out/history.json" "$ckpt/detector_seed$seed.history.json" \
-    && echo "seed $seed: done, $ckpt/detector_seed$seed.pt" ) &
+  out="out/train/${config}_seed$seed"
+  ( OMP_NUM_THREADS=1 PYTHONUNBUFFERED=1 matrix-tracker train --config "$config" --seed "$seed" --out "$out" --resume \
+      --export-from best --export "$ckpt/${config}_seed$seed.pt" >> "$out.log" 2>> "$out.progress" \
+    && cp "$out.log" "$ckpt/${config}_seed$seed.log" && cp "$out/history.json" "$ckpt/${config}_seed$seed.history.json" \
+    && echo "seed $seed: done, $ckpt/${config}_seed$seed.pt" ) &
   pids+=($!)
   echo "seed $seed: training in the background; progress: tail -f $out.progress; log: $out.log"
 done

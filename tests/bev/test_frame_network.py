@@ -1,5 +1,5 @@
 """FrameNetwork (the inference form of the BEV network) gives what BevFusionNet.forward gives, on real frames of
-the MATRIX sample with the shipped detector: heatmaps, the features carried to the next frame and the decoded
+the MATRIX sample with the shipped detectors (the default, and bev_tiny's for the first two tests): heatmaps, the features carried to the next frame and the decoded
 detections, with and without a previous frame, with views missing, and after a view's homography changed.
 
 Tolerances: logits within 1e-3 (measured 3e-5: float32 rounding of the rearranged sums), carried features within
@@ -40,8 +40,17 @@ def assert_detections_equal(a, b):
     np.testing.assert_allclose(a.scores, b.scores, atol=1e-5)
 
 
-def test_outputs_equal_the_model_over_a_sequence(shipped):
-    model, settings, data = shipped
+@pytest.fixture(scope='module', params=['default', 'detector_tiny_seed1.pt'])
+def each_shipped(request, shipped):
+    """The default detector and the faster one (bev_tiny: other channel counts through the same rearrangement)."""
+    if request.param == 'default':
+        return shipped
+    model, settings = load_model(shipped_checkpoint(request.param))
+    return model, settings, shipped[2]
+
+
+def test_outputs_equal_the_model_over_a_sequence(each_shipped):
+    model, settings, data = each_shipped
     network = FrameNetwork(model, data.grid.shape)
     masks = [torch.ones(8, dtype=torch.bool), torch.tensor([1, 0, 1, 1, 0, 1, 1, 1], dtype=torch.bool),
              torch.ones(8, dtype=torch.bool)]
@@ -55,8 +64,8 @@ def test_outputs_equal_the_model_over_a_sequence(shipped):
         previous_eager, previous = ref['bev'], out.carry
 
 
-def test_runner_detections_equal_decoding_the_model(shipped):
-    model, settings, data = shipped
+def test_runner_detections_equal_decoding_the_model(each_shipped):
+    model, settings, data = each_shipped
     runner = SequenceRunner(model, settings, data.grid)
     previous = None
     for frame in data.frames:
