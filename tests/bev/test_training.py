@@ -1,5 +1,6 @@
 """A few training steps on the real sample reduce the loss; checkpoints resume; evaluate writes PNGs."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -141,6 +142,23 @@ def test_validation_record_weights_the_selection_score():
     assert record['val_score'] == pytest.approx((0.9 + 0.7 + 2 * 0.5) / 4)     # not the plain mean 0.7
     with pytest.raises(ValueError, match='weight'):
         SequenceSpec('data/sim_a', weight=-1.0)
+
+
+def test_the_tiny_recipe_is_the_detector_recipe_with_another_model():
+    tiny, default = load_config('detector_tiny'), load_config('detector')
+    assert tiny.bev == dataclasses.replace(default.bev, model='bev_tiny')
+    assert tiny.out_dir == 'out/train/detector_tiny'
+    assert dataclasses.replace(tiny, bev=default.bev, out_dir=default.out_dir) == default
+
+
+def test_a_base_config_is_overridden_key_by_key(tmp_path):
+    (tmp_path / 'a.yaml').write_text('train: [{path: x}]\nepochs: 3\nbev: {model: bev_tiny, cell_m: 0.5}\n')
+    (tmp_path / 'b.yaml').write_text(f'base: {tmp_path / "a.yaml"}\nepochs: 4\nbev: {{cell_m: 0.25}}\n')
+    b = load_config(tmp_path / 'b.yaml')
+    assert (b.epochs, b.bev.model, b.bev.cell_m, [s.path for s in b.train]) == (4, 'bev_tiny', 0.25, ['x'])
+    (tmp_path / 'a.yaml').write_text(f'base: {tmp_path / "b.yaml"}\n')
+    with pytest.raises(ValueError, match='loop'):
+        load_config(tmp_path / 'b.yaml')
 
 
 def test_shipped_detector_recipe_validates_every_epoch_with_the_real_frames_weighted():

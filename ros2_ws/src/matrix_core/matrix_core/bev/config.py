@@ -100,10 +100,30 @@ def resolve_config_path(name_or_path) -> Path:
     raise FileNotFoundError(f'no config file {p} and no shipped config named {name_or_path!r} (shipped: {known})')
 
 
-def load_config(name_or_path, overrides: dict = None) -> TrainConfig:
-    """Read a YAML config; unknown keys are errors (a typo must not be silently ignored)."""
+# Keys whose value is a mapping of settings: a config that names a ``base`` changes only the entries it gives.
+NESTED_KEYS = ('bev', 'tracker', 'augment', 'loss_weights')
+
+
+def _read_raw(name_or_path, seen=()) -> tuple:
+    """(path, raw dict) of a config, with its ``base`` (a config name or path) read first and overridden."""
     path = resolve_config_path(name_or_path)
+    if path in seen:
+        raise ValueError(f'{path}: its base configs form a loop')
     raw = read_yaml(path)
+    base = raw.pop('base', None)
+    if base is None:
+        return path, raw
+    merged = _read_raw(base, (*seen, path))[1]
+    for key, value in raw.items():
+        nested = key in NESTED_KEYS and isinstance(value, dict) and isinstance(merged.get(key), dict)
+        merged[key] = {**merged[key], **value} if nested else value
+    return path, merged
+
+
+def load_config(name_or_path, overrides: dict = None) -> TrainConfig:
+    """Read a YAML config; unknown keys are errors (a typo must not be silently ignored). ``base: NAME`` starts
+    from another config (see NESTED_KEYS)."""
+    path, raw = _read_raw(name_or_path)
     raw.update(overrides or {})
     names = {f.name for f in dataclasses.fields(TrainConfig)}
     unknown = set(raw) - names
