@@ -1,6 +1,7 @@
 """FrameNetwork (the inference form of the BEV network) gives what BevFusionNet.forward gives, on real frames of
-the MATRIX sample with the shipped detectors (the default, and bev_tiny's for the first two tests): heatmaps, the features carried to the next frame and the decoded
-detections, with and without a previous frame, with views missing, and after a view's homography changed.
+the MATRIX sample with the shipped detectors (the default; bev_tiny's too in the first two tests): heatmaps, the
+features carried to the next frame and the decoded detections, with and without a previous frame, with views
+missing, and after a view's homography changed.
 
 Tolerances: logits within 1e-3 (measured 3e-5: float32 rounding of the rearranged sums), carried features within
 1e-4 (measured 7e-6), detections the same cells with positions and tracking offsets within 1e-5 m (measured 3e-7).

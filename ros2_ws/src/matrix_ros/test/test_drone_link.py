@@ -1,7 +1,8 @@
 """The in-process hand-over from register to calib (``matrix_ros.drone_link``) when calib has a thread of its
 own: the calls wait in order until calib's thread makes them, a drone's oldest image is dropped (logged) when
-more than ``MAX_WAITING_IMAGES`` of its images wait, ``received`` is when register handed an image over, and a process spun by
-``spin_nodes`` makes every call still waiting before it exits. Real rclpy: guard conditions and executors."""
+more than ``MAX_WAITING_IMAGES`` of its images wait, ``received`` is when register handed an image over, and a
+process spun by ``spin_nodes`` makes every call still waiting before it exits. Real rclpy: guard conditions and
+executors."""
 
 import threading
 import time
