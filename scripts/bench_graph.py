@@ -84,6 +84,7 @@ class Probe:
         self.node = rclpy.create_node('bench_graph_probe')
         self.first_image, self.tracks, self.views_used, self.drone_done, self.raw_topics = {}, {}, {}, {}, set()
         self.calibrated = {}   # stamp -> arrival of each drone's calib status
+        self.registered = {}   # stamp -> arrival of each drone's register status
         kind, topic = (CompressedImage, f'/{view}/image/compressed') if compressed else (Image, f'/{view}/image_raw')
         self.node.create_subscription(kind, topic, lambda m: self.first_image.setdefault(
             stamp_to_seconds(m.header.stamp), time.monotonic()), qos_by_name('reliable', 2))
@@ -96,8 +97,8 @@ class Probe:
             if st.name.startswith(('calib/', 'register/')):
                 stamp = stamp_to_seconds(msg.header.stamp)
                 self.drone_done[stamp] = self.drone_done.get(stamp, 0) + 1
-                if st.name.startswith('calib/'):
-                    self.calibrated.setdefault(stamp, []).append(time.monotonic())
+                arrivals = self.calibrated if st.name.startswith('calib/') else self.registered
+                arrivals.setdefault(stamp, []).append(time.monotonic())
             elif st.name == 'fuse':
                 self.views_used[stamp_to_seconds(msg.header.stamp)] = int(
                     next(kv.value for kv in st.values if kv.key == 'views_used'))
@@ -155,6 +156,9 @@ def run_once(settings: GraphSettings, facts: BagFacts, run: Path, drain_s: float
         figures['rate'] = len(lat) / (max(probe.tracks.values()) - min(probe.first_image.values()))
         figures['latency_median'], figures['latency_p95'] = np.median(lat), np.percentile(lat, 95)
         figures['latencies'] = lat.tolist()
+        # the last registration of each frame: what fuse waits for (the rest of the latency is fuse's)
+        figures['registered'] = [max(probe.registered[s]) - probe.first_image[s] if len(
+            probe.registered.get(s, ())) == len(settings.views) else float('nan') for s in stamps if s in probe.tracks]
         # calib: nothing in the graph waits for it (it may run behind the tracks: drone_link's own thread)
         calib = [max(probe.calibrated[s]) - probe.first_image[s] for s in stamps
                  if len(probe.calibrated.get(s, ())) == len(settings.views)]
@@ -215,6 +219,8 @@ def report(name: str, runs: list, views: int) -> int:
     short = [r['latencies'] for r in runs if 0 < len(r.get('latencies', ())) <= SHOW_FRAMES]
     if short:   # a short sequence: where its latency comes from (the first frame costs the most)
         print('   latency per frame (s), each run: ' + '; '.join(' '.join(f'{x:.2f}' for x in lat) for lat in short))
+        print('   of it, first image -> every drone\'s registration: ' + '; '.join(
+            ' '.join(f'{x:.2f}' for x in r['registered']) for r in runs if 0 < len(r.get('latencies', ())) <= SHOW_FRAMES))
     raw = sorted({t for r in runs for t in r['raw_topics']})
     print(f'   raw images on DDS: {", ".join(raw) if raw else "none"}')
     bad = [r for r in runs if is_bad(r)]

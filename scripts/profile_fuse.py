@@ -97,9 +97,9 @@ def main() -> int:
     steps = [n for n in times if n != 'network (BevFusionNet.forward)']
     total = sum(np.median(times[n][1:]) for n in steps)
     print(f'  {"total (without BevFusionNet.forward)":50s} {1000 * total:7.1f} ms -> {1 / total:.2f} frames/s')
-    with torch.profiler.profile(activities=[torch.profiler.ProfilerActivity.CPU]) as prof:
+    with torch.profiler.profile(activities=[torch.profiler.ProfilerActivity.CPU], record_shapes=True) as prof:
         runner.network(images, fhs, mask, runner.previous)
-    print(prof.key_averages().table(sort_by='self_cpu_time_total', row_limit=args.ops))
+    print(prof.key_averages(group_by_input_shape=True).table(sort_by='self_cpu_time_total', row_limit=args.ops))
     return 0
 
 

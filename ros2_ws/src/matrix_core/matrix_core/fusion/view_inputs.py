@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from matrix_core.fusion.views import ViewInput, ViewInputError, at_reduced_resolution, jpeg_reduction
 from matrix_core.message_fields import (ConversionError, camera_from_camera_info, image_from_msg, is_jpeg,
-                                        registration_from_msg)
+                                        jpeg_size, registration_from_msg)
 from matrix_core.register.registration import STATUS_FAILED, RegistrationError
 
 
@@ -110,15 +110,19 @@ class ViewInputs:
 
     def _decode(self, view: str, msg) -> tuple:
         """(image, r): the image decoded at 1/r, a JPEG at the smallest libjpeg scale that keeps the network
-        input once a full decode told the view's image size (r = 1 otherwise)."""
-        full = self.full_size.get(view)
-        if hasattr(msg, 'format') and self.reduced_decode and full and is_jpeg(msg):
+        input (r = 1 otherwise). The JPEG's header tells its size, so a view's first image is decoded reduced
+        too (a full decode of 8 first images, and their resize, cost a live graph's first frame ~0.1 s);
+        without a readable header, the size a full decode told last time."""
+        jpeg = self.reduced_decode and hasattr(msg, 'format') and is_jpeg(msg)
+        full = (jpeg_size(msg) or self.full_size.get(view)) if jpeg else None
+        if full:
             r = jpeg_reduction(full, self.input_size)
             if r > 1:
                 image = image_from_msg(msg, r)
                 if (image.shape[1], image.shape[0]) == (-(-full[0] // r), -(-full[1] // r)):
+                    self.full_size[view] = full
                     return image, r
-                # the stream's image size changed: decode in full and learn the new size
+                # not the size its header (or the stream's last image) said: decode in full and learn it
         image = image_from_msg(msg)
         self.full_size[view] = (image.shape[1], image.shape[0])
         return image, 1
