@@ -66,6 +66,7 @@ def test_jpeg_size_reads_the_frame_header(ds):
     png = cv2.imencode('.png', img)[1].tobytes()
     for msg in (CompressedImage(format='jpeg', data=progressive[:1000].replace(b'\xff\xc2', b'\xff\xda')),
                 CompressedImage(format='jpeg', data=progressive[:20]), CompressedImage(format='jpeg'),
+                CompressedImage(format='jpeg', data=b'\xff\xd8' + b'\xff' * 750_000),   # fill bytes only: bounded
                 CompressedImage(format='png', data=png), image_to_msg(img)):
         assert jpeg_size(msg) is None
 
