@@ -152,6 +152,12 @@ def test_a_views_first_jpeg_is_decoded_reduced_by_its_header(real, monkeypatch):
     view = inputs.view_input('D1', image_to_compressed(image[::2, ::2].copy()), _camera_info(camera), 'camera_info')
     assert reductions == [2, 1] and inputs.full_size['D1'] == (960, 540)
     assert not view.usable and 'image is 960x540, its camera_info is for 1920x1080' in view.reason, view.reason
+    # the size check is each image's own: the next frame's image, decoded on arrival, does not change it
+    msg = image_to_compressed(image)
+    inputs.decode_early('D1', msg)
+    inputs.decode_early('D1', image_to_compressed(image[::2, ::2].copy()))
+    view = inputs.view_input('D1', msg, _camera_info(camera), 'camera_info')
+    assert view.usable and view.image.shape[:2] == (540, 960), view.reason
 
 
 def test_early_decodes_are_bounded_and_a_bad_image_still_says_why(real):

@@ -57,7 +57,7 @@ class ViewInputs:
 
     def __init__(self, input_size: tuple, min_confidence: float, reduced_decode: bool):
         self.input_size, self.min_confidence, self.reduced_decode = input_size, min_confidence, reduced_decode
-        self.full_size = {}   # view -> (w, h) of its last fully decoded image
+        self.full_size = {}   # view -> (w, h) of its last image: the next one's when its JPEG header says none
         self._early = {}      # id(msg) -> (msg, (image, r)): decoded on arrival, not used yet
 
     def decode_early(self, view: str, msg) -> None:
@@ -98,19 +98,18 @@ class ViewInputs:
             else:
                 camera = camera_from_camera_info(geometry_msg)
                 img_H_ground, camera_size = camera.img_H_ground(), (camera.width, camera.height)
-            image, r = early or self._decode(view, image_msg)
-            if camera_size is not None and self.full_size[view] != camera_size:
+            image, r, full = early or self._decode(view, image_msg)
+            if camera_size is not None and full != camera_size:
                 # its homography is for other pixels: lifting would put the features in the wrong cells
-                raise ViewInputError('image is {}x{}, its camera_info is for {}x{}'.format(*self.full_size[view],
-                                                                                          *camera_size))
+                raise ViewInputError('image is {}x{}, its camera_info is for {}x{}'.format(*full, *camera_size))
         except (ViewInputError, ConversionError) as exc:
             return ViewInput(reason=str(exc), confidence=confidence)
         return ViewInput(image, img_H_ground if r == 1 else at_reduced_resolution(img_H_ground, r),
                          confidence=confidence)
 
     def _decode(self, view: str, msg) -> tuple:
-        """(image, r): the image decoded at 1/r, a JPEG at the smallest libjpeg scale that keeps the network
-        input (r = 1 otherwise). The JPEG's header tells its size, so a view's first image is decoded reduced
+        """(image, r, (w, h) of the full image): the image decoded at 1/r, a JPEG at the smallest libjpeg scale
+        that keeps the network input (r = 1 otherwise). The JPEG's header tells its size, so a view's first image is decoded reduced
         too (a full decode of 8 first images, and their resize, cost a live graph's first frame ~0.1 s);
         without a readable header, the size a full decode told last time."""
         jpeg = self.reduced_decode and hasattr(msg, 'format') and is_jpeg(msg)
@@ -121,8 +120,8 @@ class ViewInputs:
                 image = image_from_msg(msg, r)
                 if (image.shape[1], image.shape[0]) == (-(-full[0] // r), -(-full[1] // r)):
                     self.full_size[view] = full
-                    return image, r
+                    return image, r, full
                 # not the size its header (or the stream's last image) said: decode in full and learn it
         image = image_from_msg(msg)
         self.full_size[view] = (image.shape[1], image.shape[0])
-        return image, 1
+        return image, 1, self.full_size[view]
