@@ -126,7 +126,7 @@ def test_an_image_decoded_on_arrival_gives_the_same_view(real):
     camera, image = real
     msg, geometry = image_to_compressed(image), _homography(camera)
     plain, early = _inputs(), _inputs()
-    for inputs in (plain, early):   # each with a frame before, as in a live stream
+    for inputs in (plain, early):   # a first frame teaches the full size: the next decodes reduced
         assert inputs.view_input('D1', image_to_compressed(image), geometry, 'homography').usable
     early.decode_early('D1', msg)
     assert len(early._early) == 1
@@ -137,27 +137,28 @@ def test_an_image_decoded_on_arrival_gives_the_same_view(real):
     assert a.image.shape[:2] == (540, 960)   # decoded at 1/2 for a 480x272 network input
 
 
-def test_a_views_first_jpeg_is_decoded_reduced_by_its_header(real, monkeypatch):
-    # no full decode to learn the size first (it cost the live graph's first frame ~0.1 s): the header tells it
+def test_a_views_first_jpeg_is_decoded_in_full_the_next_ones_reduced(real, monkeypatch):
+    # the first in full, as the offline evaluation decodes every frame (the tracks start from it: live == offline)
     from matrix_core.fusion import view_inputs
     camera, image = real
     reductions = []
     decode = view_inputs.image_from_msg
     monkeypatch.setattr(view_inputs, 'image_from_msg', lambda msg, r=1: reductions.append(r) or decode(msg, r))
-    inputs = _inputs()
-    view = inputs.view_input('D1', image_to_compressed(image), _camera_info(camera), 'camera_info')
-    assert view.usable and view.image.shape[:2] == (540, 960) and reductions == [2]
-    assert inputs.full_size['D1'] == (1920, 1080)
-    # the stream's size changes (a drone set to 960x540): its header says so, no decode at the old size first
-    view = inputs.view_input('D1', image_to_compressed(image[::2, ::2].copy()), _camera_info(camera), 'camera_info')
-    assert reductions == [2, 1] and inputs.full_size['D1'] == (960, 540)
+    inputs, geometry = _inputs(), _camera_info(camera)
+    view = inputs.view_input('D1', image_to_compressed(image), geometry, 'camera_info')
+    assert view.usable and view.image.shape[:2] == (1080, 1920) and reductions == [1]
+    view = inputs.view_input('D1', image_to_compressed(image), geometry, 'camera_info')
+    assert view.usable and view.image.shape[:2] == (540, 960) and reductions == [1, 2]
+    # the stream's size changes: the reduced decode shows it, a full decode learns it, the size check says so
+    view = inputs.view_input('D1', image_to_compressed(image[::2, ::2].copy()), geometry, 'camera_info')
+    assert reductions == [1, 2, 2, 1] and inputs.full_size['D1'] == (960, 540)
     assert not view.usable and 'image is 960x540, its camera_info is for 1920x1080' in view.reason, view.reason
     # the size check is each image's own: the next frame's image, decoded on arrival, does not change it
     msg = image_to_compressed(image)
     inputs.decode_early('D1', msg)
     inputs.decode_early('D1', image_to_compressed(image[::2, ::2].copy()))
-    view = inputs.view_input('D1', msg, _camera_info(camera), 'camera_info')
-    assert view.usable and view.image.shape[:2] == (540, 960), view.reason
+    view = inputs.view_input('D1', msg, geometry, 'camera_info')
+    assert view.usable and view.image.shape[:2] == (1080, 1920), view.reason
 
 
 def test_early_decodes_are_bounded_and_a_bad_image_still_says_why(real):

@@ -77,41 +77,6 @@ def is_jpeg(msg) -> bool:
     return 'jpeg' in fmt or 'jpg' in fmt or bytes(_bytes(msg.data[:2])) == b'\xff\xd8'
 
 
-# JPEG markers that stand alone (no length field): TEM, RST0-7, SOI
-_STANDALONE = {0x01, *range(0xD0, 0xD8), 0xD8}
-# frame headers (SOF0-SOF15) give the image size; C4 (DHT), C8 (JPG) and CC (DAC) share the range but are not
-_FRAME_HEADERS = set(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}
-# markers (and fill bytes) read before giving up: a real file has a few to some tens before its frame header (APPn,
-# DQT, an ICC profile in chunks); a hostile one of 750 kB of fill bytes took 0.26 s without a bound
-_MAX_MARKERS = 512
-
-
-def jpeg_size(msg) -> tuple | None:
-    """(width, height) of a CompressedImage's JPEG from its frame header (SOFn marker), without decoding it: a
-    walk over the segments before it (a few; their lengths skip the tables). None when ``msg`` holds no JPEG
-    or its header is damaged (then only a decode can tell)."""
-    if not hasattr(msg, 'format') or not len(msg.data) or not is_jpeg(msg):
-        return None
-    data = _bytes(msg.data)
-    i, n = 2, len(data)
-    for _ in range(_MAX_MARKERS):
-        if i + 4 > n or data[i] != 0xFF:
-            return None
-        marker = int(data[i + 1])
-        if marker == 0xFF or marker in _STANDALONE:   # a fill byte, or a marker without a segment
-            i += 1 if marker == 0xFF else 2
-            continue
-        if marker in _FRAME_HEADERS:   # FF Cn, length (2), precision (1), height (2), width (2)
-            if i + 9 > n:
-                return None
-            height, width = int(data[i + 5]) << 8 | int(data[i + 6]), int(data[i + 7]) << 8 | int(data[i + 8])
-            return (width, height) if width and height else None
-        if marker == 0xDA:   # start of scan before any frame header: not a valid JPEG
-            return None
-        i += 2 + (int(data[i + 2]) << 8 | int(data[i + 3]))
-    return None
-
-
 def compressed_fields(image: np.ndarray, fmt: str = 'jpeg', quality: int = 95) -> dict:
     """(H, W, 3) BGR uint8 -> sensor_msgs/CompressedImage fields (``format``, ``data`` as bytes)."""
     ext, params = ('.jpg', [cv2.IMWRITE_JPEG_QUALITY, quality]) if fmt == 'jpeg' else ('.png', [])

@@ -5,7 +5,6 @@ import pytest
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
 from matrix_core.datasets import MatrixDataset
-from matrix_core.message_fields import jpeg_size
 from matrix_ros.conversions import (ConversionError, camera_info_to_camera, camera_to_camera_info,
                                     camera_to_pose, compressed_to_image, image_to_compressed, image_to_msg,
                                     msg_to_image, pose_to_world_T_cam, seconds_to_stamp, stamp_to_seconds)
@@ -46,29 +45,6 @@ def test_compressed(ds):
         compressed_to_image(CompressedImage(format='jpeg', data=b'\xff\xd8garbage'))
     with pytest.raises(ConversionError, match='empty'):
         compressed_to_image(CompressedImage(format='jpeg'))
-
-
-def test_jpeg_size_reads_the_frame_header(ds):
-    """The size of a JPEG without decoding it (fuse decodes a view's first image reduced by it): the real
-    sample's own files, a progressive one, one with a large APP1 segment before the tables; None for what no
-    header says (not a JPEG, damaged, a PNG, a raw image)."""
-    import cv2
-
-    real = CompressedImage(format='jpeg', data=ds.image_path('D3', 2).read_bytes())
-    assert jpeg_size(real) == (1920, 1080)
-    img = ds.load_image('D1', 0)[:357, :641]   # odd sizes: width and height not swapped, not rounded
-    progressive = cv2.imencode('.jpg', img, [cv2.IMWRITE_JPEG_PROGRESSIVE, 1])[1].tobytes()
-    assert jpeg_size(CompressedImage(format='jpeg', data=progressive)) == (641, 357)
-    app1 = b'\xff\xe1' + (2 + 60000).to_bytes(2, 'big') + b'\xff\xc0' * 30000   # marker-like bytes inside
-    with_exif = progressive[:2] + app1 + progressive[2:]
-    assert jpeg_size(CompressedImage(format='jpeg', data=with_exif)) == (641, 357)
-    assert cv2.imdecode(np.frombuffer(with_exif, np.uint8), cv2.IMREAD_COLOR).shape == (357, 641, 3)
-    png = cv2.imencode('.png', img)[1].tobytes()
-    for msg in (CompressedImage(format='jpeg', data=progressive[:1000].replace(b'\xff\xc2', b'\xff\xda')),
-                CompressedImage(format='jpeg', data=progressive[:20]), CompressedImage(format='jpeg'),
-                CompressedImage(format='jpeg', data=b'\xff\xd8' + b'\xff' * 750_000),   # fill bytes only: bounded
-                CompressedImage(format='png', data=png), image_to_msg(img)):
-        assert jpeg_size(msg) is None
 
 
 def test_camera_info_roundtrip_and_projection(ds):
