@@ -175,6 +175,36 @@ def test_checkpoint_names_a_path_or_a_shipped_file(tmp_path, monkeypatch):
     assert FuseSettings(checkpoint='sub/detector_seed1.pt').checkpoint_path() == Path('sub/detector_seed1.pt')
 
 
+def test_inputs_made_on_arrival_give_the_same_frames(matrix_sample, model):
+    """The fuse node decodes each JPEG and makes its network input as it arrives (``decode_early``); fused
+    frames must be exactly those of views made when the frame is complete, the first (decoded in full) included."""
+    from matrix_core.fusion.view_inputs import ViewInputs
+    from matrix_msgs.msg import HomographyStamped
+    from matrix_ros.conversions import image_to_compressed
+
+    net, bev = model
+    dataset = open_dataset(matrix_sample)
+    size = (bev.image_width, bev.image_height)
+    fusers = [BevFuser(FuseSettings(area=list(dataset.area)), net, bev) for _ in range(2)]
+    inputs = [ViewInputs(size, 0.3, reduced_decode=True) for _ in range(2)]
+    for k, frame in enumerate(dataset.frames[:3]):
+        messages = {}
+        for v in dataset.views:
+            H = np.linalg.inv(dataset.camera(v, frame).img_H_ground())
+            messages[v] = (image_to_compressed(dataset.load_image(v, frame)), HomographyStamped(
+                status='ok', confidence=1.0, h_img_to_ground=(H / H[2, 2]).ravel().tolist()))
+            inputs[1].decode_early(v, messages[v][0])
+        views = [{v: x.view_input(v, *m, 'homography') for v, m in messages.items()} for x in inputs]
+        assert all(views[1][v].network_image is not None and views[0][v].network_image is None for v in dataset.views)
+        plain, early = (f.process(1.0 + 0.5 * k, vs) for f, vs in zip(fusers, views))
+        assert len(plain.detections) > 20 and len(plain.tracks) > 20
+        np.testing.assert_array_equal(plain.heatmap, early.heatmap)
+        np.testing.assert_array_equal(plain.detections.xy, early.detections.xy)
+        assert [(t.track_id, *t.xy) for t in plain.tracks] == [(t.track_id, *t.xy) for t in early.tracks]
+        for f in fusers:
+            f.prepare_next()
+
+
 def test_reduced_jpeg_decode_gives_the_detections_of_the_full_decode(matrix_sample, model):
     """Real 1920x1080 views as a bag carries them (JPEG): decoded at 1/r size with the homography moved to
     that resolution, the network sees (almost) the same input and finds the same people."""

@@ -9,6 +9,7 @@ import pytest
 from sensor_msgs.msg import CompressedImage, Image
 from std_msgs.msg import Header
 
+from matrix_core.bev.data import prepare_image
 from matrix_core.datasets import MatrixDataset
 from matrix_core.fusion.view_inputs import EARLY_KEPT, NOT_SENT, ImageNotSent, ViewInputs
 from matrix_core.register.registration import Registration
@@ -135,6 +136,9 @@ def test_an_image_decoded_on_arrival_gives_the_same_view(real):
     np.testing.assert_array_equal(a.image, b.image)
     np.testing.assert_allclose(a.img_H_ground, b.img_H_ground)
     assert a.image.shape[:2] == (540, 960)   # decoded at 1/2 for a 480x272 network input
+    # the network input made on arrival too: what the fuser would make of the same image, exactly
+    assert a.network_image is None
+    np.testing.assert_array_equal(b.network_image, prepare_image(a.image, (480, 272)))
 
 
 def test_a_views_first_jpeg_is_decoded_in_full_the_next_ones_reduced(real, monkeypatch):

@@ -135,7 +135,8 @@ class BevFuser:
             raise ViewInputError(f'ground homography unusable: {exc}') from None
         if not np.all(np.isfinite(fh)):
             raise ViewInputError('ground homography gives a non-finite feature warp')
-        return prepare_image(image, self.input_size), fh
+        prepared = view.network_image if view.network_image is not None else prepare_image(image, self.input_size)
+        return prepared, fh
 
     def process(self, stamp: float, views: dict) -> FuseResult:
         """Fuse one frame. ``views``: view name -> :class:`ViewInput` (absent names count as missing).

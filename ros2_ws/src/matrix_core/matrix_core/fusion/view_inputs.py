@@ -10,12 +10,15 @@ only subscribes and hands the messages over. Geometry:
   image of another size than the CameraInfo's makes the view missing.
 
 Images may be decoded as they arrive (:meth:`ViewInputs.decode_early`), while the drones still register and
-calibrate that frame: the decode then no longer sits between the frame's last homography and its tracks.
+calibrate that frame, and made into the network's input there too (the same function the fuser would call on
+the same image, so the results do not change): neither then sits between the frame's last homography and its
+tracks. The first frame gains most: each view's first image is decoded and resized in full (see ``_decode``).
 """
 
 from dataclasses import dataclass
 
-from matrix_core.fusion.views import ViewInput, ViewInputError, at_reduced_resolution, jpeg_reduction
+from matrix_core.bev.data import prepare_image
+from matrix_core.fusion.views import ViewInput, ViewInputError, at_reduced_resolution, check_image, jpeg_reduction
 from matrix_core.message_fields import (ConversionError, camera_from_camera_info, image_from_msg, is_jpeg,
                                         registration_from_msg)
 from matrix_core.register.registration import STATUS_FAILED, RegistrationError
@@ -58,7 +61,7 @@ class ViewInputs:
     def __init__(self, input_size: tuple, min_confidence: float, reduced_decode: bool):
         self.input_size, self.min_confidence, self.reduced_decode = input_size, min_confidence, reduced_decode
         self.full_size = {}   # view -> (w, h) of its last fully decoded image
-        self._early = {}      # id(msg) -> (msg, (image, r)): decoded on arrival, not used yet
+        self._early = {}      # id(msg) -> (msg, (image, r, full size), network input): made on arrival, not used yet
 
     def decode_early(self, view: str, msg) -> None:
         """Decode ``msg``, one of ``view``'s images, now; :meth:`view_input` takes it from here. A message that
@@ -66,9 +69,11 @@ class ViewInputs:
         if msg is None or isinstance(msg, ImageNotSent):
             return
         try:
-            self._early[id(msg)] = (msg, self._decode(view, msg))   # the message kept: its id stays unique
+            decoded = self._decode(view, msg)
+            network_image = prepare_image(check_image(decoded[0]), self.input_size)
         except (ViewInputError, ConversionError):
             return
+        self._early[id(msg)] = (msg, decoded, network_image)   # the message kept: its id stays unique
         while len(self._early) > EARLY_KEPT:
             del self._early[next(iter(self._early))]
 
@@ -85,7 +90,7 @@ class ViewInputs:
         geometry in that reason (e.g. 'homography')."""
         if isinstance(image_msg, ImageNotSent):
             return ViewInput(reason=NOT_SENT)
-        early = self._early.pop(id(image_msg), (None, None))[1]
+        _, early, network_image = self._early.pop(id(image_msg), (None, None, None))
         if image_msg is None or geometry_msg is None:
             return ViewInput(reason='no ' + ' and no '.join(
                 p for p, x in (('image', image_msg), (geometry_name, geometry_msg)) if x is None))
@@ -105,7 +110,7 @@ class ViewInputs:
         except (ViewInputError, ConversionError) as exc:
             return ViewInput(reason=str(exc), confidence=confidence)
         return ViewInput(image, img_H_ground if r == 1 else at_reduced_resolution(img_H_ground, r),
-                         confidence=confidence)
+                         confidence=confidence, network_image=network_image)
 
     def _decode(self, view: str, msg) -> tuple:
         """(image, r, (w, h) of the full image): the image decoded at 1/r, a JPEG at the smallest libjpeg scale

@@ -26,12 +26,15 @@ class ViewInput:
         img_H_ground: (3, 3) ground metres -> pixels, or None.
         reason: why the view is missing ('' when both parts are there).
         confidence: registration confidence of the homography (None for a calibration).
+        network_image: (3, h, w) float32 network input made from ``image`` when it arrived
+            (``ViewInputs.decode_early``), or None: the fuser makes it.
     """
 
     image: np.ndarray = None
     img_H_ground: np.ndarray = None
     reason: str = ''
     confidence: float = None
+    network_image: np.ndarray = None
 
     @property
     def usable(self) -> bool:
