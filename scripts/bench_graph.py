@@ -15,8 +15,9 @@ each played in two ways:
   and frames fused without every view say whether the graph keeps up.
 
 A probe subscribes to the first drone's images, ``/tracks`` and the fuse node's diagnostics and measures per
-frame the wall time from the frame's first image to its tracks (latency), and to the last drone's calib status
-(calibration: nothing in the graph waits for it, so it may come after the tracks). Every process's CPU time (user +
+frame the wall time from the frame's first image to its tracks (latency), to the last drone's registration (what
+fuse waits for; printed per frame for short sequences) and to the last drone's calib status (calibration: nothing
+in the graph waits for it, so it may come after the tracks). Every process's CPU time (user +
 system from /proc, DDS and idle spinning included) between the first image and the last tracks, divided by
 the frames, is each stage's CPU-s per frame (``drone``: calib + register of all drones). The probe also lists
 the graph's topics: with JPEG bags no raw ``sensor_msgs/Image`` may cross DDS. ``--runs N`` repeats each
