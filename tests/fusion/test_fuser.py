@@ -179,8 +179,7 @@ def test_inputs_made_on_arrival_give_the_same_frames(matrix_sample, model):
     """The fuse node decodes each JPEG and makes its network input as it arrives (``decode_early``); fused
     frames must be exactly those of views made when the frame is complete, the first (decoded in full) included."""
     from matrix_core.fusion.view_inputs import ViewInputs
-    from matrix_msgs.msg import HomographyStamped
-    from matrix_ros.conversions import image_to_compressed
+    from matrix_ros.conversions import image_to_compressed, registration_to_msg
 
     net, bev = model
     dataset = open_dataset(matrix_sample)
@@ -190,9 +189,9 @@ def test_inputs_made_on_arrival_give_the_same_frames(matrix_sample, model):
     for k, frame in enumerate(dataset.frames[:3]):
         messages = {}
         for v in dataset.views:
-            H = np.linalg.inv(dataset.camera(v, frame).img_H_ground())
-            messages[v] = (image_to_compressed(dataset.load_image(v, frame)), HomographyStamped(
-                status='ok', confidence=1.0, h_img_to_ground=(H / H[2, 2]).ravel().tolist()))
+            ground_H_img = np.linalg.inv(dataset.camera(v, frame).img_H_ground())
+            messages[v] = (image_to_compressed(dataset.load_image(v, frame)),
+                           registration_to_msg(Registration('ok', np.eye(3), ground_H_img, confidence=1.0)))
             inputs[1].decode_early(v, messages[v][0])
         views = [{v: x.view_input(v, *m, 'homography') for v, m in messages.items()} for x in inputs]
         assert all(views[1][v].network_image is not None and views[0][v].network_image is None for v in dataset.views)
