@@ -150,7 +150,7 @@ def test_a_warmed_up_network_gives_the_same_outputs_and_keeps_nothing(shipped):
     cold, warm = FrameNetwork(model, data.grid.shape), FrameNetwork(model, data.grid.shape)
     x = data.inputs(data.frames[0])
     warm.warm_up(len(x['images']), (x['images'].shape[-1], x['images'].shape[-2]))
-    assert not warm._grids   # no sampling grid of the zeros' identity warp is served to a real frame
+    assert not warm._taps   # no lifting taps of the zeros' identity warp is served to a real frame
     mask, previous = torch.ones(len(x['images']), dtype=torch.bool), {}
     for network in (cold, warm):
         first = network(x['images'], x['feat_H_grid'], mask)

@@ -4,7 +4,9 @@ import numpy as np
 import pytest
 import torch
 
-from matrix_core.bev.lifting import feat_H_grid, orient_ground_homography, warp_to_grid
+import torch.nn.functional as F
+
+from matrix_core.bev.lifting import feat_H_grid, lifting_taps, orient_ground_homography, sampling_grid, warp_to_grid
 from matrix_core.bev.settings import BevSettings
 from matrix_core.datasets import open_dataset
 
@@ -63,3 +65,31 @@ def test_cells_behind_the_camera_are_not_seen(sample):
     np.testing.assert_allclose(H2, H)
     assert np.allclose(orient_ground_homography(-cam.img_H_ground(), (1920, 1080)), cam.img_H_ground())
     assert np.linalg.norm(cells[np.argmax(s.reshape(-1))] - centre) > 1.0
+
+
+def test_lifting_taps_sample_as_grid_sample(sample):
+    """FrameNetwork's lifting (the taps gathered by F.embedding_bag from channels-last maps) against grid_sample on
+    sampling_grid's points: every real view of two frames, and a view turned away from the ground (nothing seen)."""
+    ds, grid = sample
+    input_size, stride = (320, 176), 4
+    h, w = input_size[1] // stride, input_size[0] // stride
+    fhs = [feat_H_grid(ds.camera(v, f).img_H_ground(), grid.ground_H_grid, (1920, 1080), input_size, stride)
+           for f in (0, 4) for v in ds.views]
+    away = fhs[0].copy()
+    away[2] *= -1.0                                          # every cell behind the camera
+    fhs = torch.tensor(np.stack(fhs + [away]), dtype=torch.float32)
+    maps = torch.rand(len(fhs), 16, h, w, generator=torch.Generator().manual_seed(0))
+    index, weight, seen = lifting_taps(fhs, (h, w), grid.shape)
+    offsets = (torch.arange(len(fhs)) * h * w)[:, None, None]
+    lifted = F.embedding_bag((index + offsets).reshape(-1, 4), maps.permute(0, 2, 3, 1).reshape(-1, 16),
+                             per_sample_weights=weight.reshape(-1, 4), mode='sum')
+    lifted = lifted.reshape(len(fhs), *grid.shape, 16).permute(0, 3, 1, 2)
+    points, seen_grid = sampling_grid(fhs, (h, w), grid.shape)
+    expected = F.grid_sample(maps, points, mode='bilinear', padding_mode='zeros', align_corners=False)
+    torch.testing.assert_close(lifted, expected, atol=1e-4, rtol=0)
+    assert torch.equal(seen, seen_grid.reshape(len(fhs), -1))
+    assert seen[:-1].sum(dim=1).min() > 0.2 * seen.shape[1] and seen[-1].sum() == 0
+    assert weight[-1].abs().max() == 0 and index.min() >= 0 and index.max() < h * w
+    # cells whose point lies in the outer half pixel: the taps outside the map weigh nothing, as grid_sample's
+    border = seen.bool()[:-1] & (weight[:-1] > 0).sum(dim=-1).lt(4) & weight[:-1].sum(dim=-1).lt(0.999)
+    assert border.sum() > 0

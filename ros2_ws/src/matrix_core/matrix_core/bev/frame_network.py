@@ -4,7 +4,10 @@ real frames) with less work per frame. Profiled on one core (``scripts/profile_f
 
 - batch norms folded into the convolutions before them (eval mode: a per-channel affine map);
 - only the views present are encoded and warped (forward warps zeros for the missing ones), and a view's
-  sampling grid is computed once per distinct ``feat_H_grid`` (a static camera: once);
+  sampling taps are computed once per distinct ``feat_H_grid`` (a static camera: once);
+- the warp gathers each bilinear tap's channels as one row of channels-last features (``lifting_taps``,
+  ``F.embedding_bag``) instead of ``F.grid_sample`` on NCHW maps, straight into the aggregation's
+  channels-last input;
 - pooling: the lifted features are >= 0 (the encoder ends in a ReLU, bilinear sampling keeps the sign) and 0
   where a view does not see the cell, so the masked mean's sum is the plain sum and the masked max the plain
   max (``aggregation.masked_view_pool`` builds masked copies of the (V, C, R, Q) features);
@@ -23,7 +26,7 @@ import torch.nn.functional as F
 from torch import nn
 from torch.nn.utils.fusion import fuse_conv_bn_eval
 
-from matrix_core.bev.lifting import sampling_grid
+from matrix_core.bev.lifting import lifting_taps
 
 CL = torch.channels_last
 
@@ -79,7 +82,7 @@ class FrameNetwork:
         self.encoder = fold_batch_norms(model.encoder).to(memory_format=CL)
         self.aggregate = fold_batch_norms(model.aggregate.convs).to(memory_format=CL)
         self.heads = copy.deepcopy(model.heads).eval().to(memory_format=CL)
-        self._grids = {}   # view index -> (feat_H_grid bytes, (1, R, Q, 2) grid, (1, 1, R, Q) seen)
+        self._taps = {}   # view index -> (feat_H_grid bytes, lifting_taps: (R*Q, 4) index, (R*Q, 4) weight, (R*Q,) seen)
         self.temporal = None
         if model.temporal is not None:
             convs = fold_batch_norms(model.temporal.convs).to(memory_format=CL)
@@ -99,15 +102,12 @@ class FrameNetwork:
         n_views = len(view_mask)
         rows, cols = self.grid_shape
         if views:
-            feats = self.encoder(images[views].contiguous(memory_format=CL)).contiguous()   # grid_sample: NCHW
-            grids, seen = zip(*(self._grid(v, feat_H_grid[v], feats.shape[-2:]) for v in views))
-            bev = F.grid_sample(feats, torch.cat(grids), mode='bilinear', padding_mode='zeros', align_corners=False)
-            count = torch.cat(seen).sum(dim=0, keepdim=True)
-            pooled = torch.cat([bev.sum(dim=0, keepdim=True) / count.clamp(min=1.0), bev.amax(dim=0, keepdim=True),
-                                count / n_views], dim=1)
+            present = images if len(views) == n_views else images[views]   # no copy when every view is there
+            feats = self.encoder(present.contiguous(memory_format=CL))
+            pooled = self._lift_and_pool(feats, self._taps_of(views, feat_H_grid, feats.shape[-2:]), n_views)
         else:
-            pooled = images.new_zeros(1, 2 * self.encoder.out_channels + 1, rows, cols)
-        aggregated = self.aggregate(pooled.contiguous(memory_format=CL))
+            pooled = images.new_zeros(1, 2 * self.encoder.out_channels + 1, rows, cols).contiguous(memory_format=CL)
+        aggregated = self.aggregate(pooled)
         if self.temporal is None:
             return FrameResult(self._heatmap(aggregated), aggregated, aggregated)
         t = self.temporal
@@ -143,21 +143,45 @@ class FrameNetwork:
     def warm_up(self, n_views: int, image_size: tuple) -> None:
         """One frame of ``n_views`` zero images of (w, h) ``image_size``, without and with previous features: the
         first calls of each convolution build its kernels (measured ~0.1 s more on one core over the first two
-        frames), which a live graph's first frames should not pay. Nothing is kept (outputs, sampling grids)."""
+        frames), which a live graph's first frames should not pay. Nothing is kept (outputs, sampling taps)."""
         w, h = image_size
         images, mask = torch.zeros(n_views, 3, h, w), torch.ones(n_views, dtype=torch.bool)
         identity = torch.eye(3).repeat(n_views, 1, 1)   # any finite warp: the grid's cells see the image's
         first = self(images, identity, mask)
         self.heads_at(self(images, identity, mask, first.carry).fused, torch.tensor([0]), torch.tensor([0]), True)
-        self._grids.clear()
+        self._taps.clear()
 
-    def _grid(self, view: int, feat_H_grid, feat_size) -> tuple:
-        """The view's sampling grid and seen mask, recomputed only when its feat_H_grid changed."""
-        key = feat_H_grid.numpy().tobytes()
-        cached = self._grids.get(view)
-        if cached is None or cached[0] != key:
-            cached = self._grids[view] = (key, *sampling_grid(feat_H_grid[None], feat_size, self.grid_shape))
-        return cached[1:]
+    def _taps_of(self, views: list, feat_H_grid, feat_size) -> list:
+        """Each view's (index, weight, seen) of :func:`lifting_taps`, kept while its feat_H_grid stays the same (a
+        static camera: computed once; the changed ones in one call)."""
+        keys = {v: feat_H_grid[v].numpy().tobytes() for v in views}
+        changed = [v for v in views if self._taps.get(v, (None,))[0] != keys[v]]
+        if changed:
+            for v, *taps in zip(changed, *lifting_taps(feat_H_grid[changed], feat_size, self.grid_shape)):
+                self._taps[v] = (keys[v], *taps)
+        return [self._taps[v][1:] for v in views]
+
+    def _lift_and_pool(self, feats, taps: list, n_views: int):
+        """(1, 2C + 1, R, Q) channels-last: per cell the mean and the max over views of the features lifted to it
+        and the share of the ``n_views`` that see it. ``feats`` (K, C, h, w) of the views present, ``taps`` theirs.
+
+        The lifting samples as ``F.grid_sample`` on :func:`sampling_grid` does, but gathers each tap's C channels as
+        one row of the channels-last features (:func:`lifting_taps`, ``F.embedding_bag``), and the pooled maps are
+        written into one channels-last buffer, the aggregation's input: no concatenation and no layout copies.
+        On one core, 8 views: taps 4 + lifting and pooling 4 ms against 5 + 13 + 5 (sampling grids, grid_sample,
+        concatenation and copies) before."""
+        k, c, h, w = feats.shape
+        index = torch.cat([t[0] + i * h * w for i, t in enumerate(taps)])
+        weight = torch.cat([t[1] for t in taps])
+        table = feats.permute(0, 2, 3, 1).reshape(k * h * w, c)   # a view of channels-last features
+        lifted = F.embedding_bag(index, table, per_sample_weights=weight, mode='sum').reshape(k, -1, c)
+        count = torch.stack([t[2] for t in taps]).sum(dim=0)[:, None]
+        rows, cols = self.grid_shape
+        pooled = lifted.new_empty(rows * cols, 2 * c + 1)
+        torch.div(lifted.sum(dim=0), count.clamp(min=1.0), out=pooled[:, :c])
+        torch.amax(lifted, dim=0, out=pooled[:, c:2 * c])
+        torch.div(count, n_views, out=pooled[:, 2 * c:])
+        return pooled.reshape(1, rows, cols, 2 * c + 1).permute(0, 3, 1, 2)
 
     def _heatmap(self, fused):
         return self.heads.heatmap(fused)[0]

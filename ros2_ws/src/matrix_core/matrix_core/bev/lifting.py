@@ -67,6 +67,52 @@ def sampling_grid(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tuple
     return norm.reshape(n, rows, cols, 2), inside.reshape(n, 1, rows, cols).to(dt)
 
 
+def lifting_taps(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tuple) -> tuple:
+    """Where :func:`warp_to_grid` reads, as pixel indices and weights: for each cell of each view the four
+    neighbouring feature pixels that ``F.grid_sample`` (bilinear, zeros padding, align_corners=False) interpolates
+    at the point :func:`sampling_grid` gives it.
+
+    Args:
+        feat_H_grid: (N, 3, 3) float32 grid cells -> feature pixels, depth-positive (see :func:`feat_H_grid`).
+        feat_size: (h, w) of the feature maps.
+        grid_shape: (rows, cols) of the BEV grid.
+
+    Returns:
+        index (N, rows * cols, 4) long, ``y * w + x`` of each neighbour; weight (N, rows * cols, 4) float, its
+        bilinear weight, 0 for a neighbour outside the map and for every neighbour of a cell not seen (index
+        then within the map, any); seen (N, rows * cols) float, as :func:`sampling_grid`'s.
+
+    ``F.embedding_bag(index + k * h * w, maps.permute(0, 2, 3, 1).reshape(-1, C), per_sample_weights=weight,
+    mode='sum')`` then samples map ``k`` of (N, C, h, w) ``maps`` as grid_sample does, to float rounding (~1e-5
+    here), each tap's C channels one contiguous row of channels-last maps.
+    """
+    h, w = feat_size
+    cells = _cells(grid_shape)
+    m = feat_H_grid[:, :, :, None]
+    x, y, depth = (m[:, i, 0] * cells[0] + m[:, i, 1] * cells[1] + m[:, i, 2] for i in range(3))   # (N, R*C) each
+    in_front = depth > 1e-9
+    depth = torch.where(in_front, depth, torch.ones_like(depth))
+    u, v = x / depth, y / depth
+    seen = in_front & (u >= -0.5) & (u <= w - 0.5) & (v >= -0.5) & (v <= h - 0.5)
+    u, v = torch.where(seen, u, -1.0), torch.where(seen, v, -1.0)   # far points: no overflow below
+    x0, y0 = u.floor(), v.floor()
+    fx, fy = u - x0, v - y0
+    seen = seen.to(feat_H_grid.dtype)
+    wx0, wx1 = (1 - fx) * (x0 >= 0), fx * (x0 <= w - 2)
+    wy0, wy1 = (1 - fy) * (y0 >= 0) * seen, fy * (y0 <= h - 2) * seen
+    weight = torch.stack([wx0 * wy0, wx1 * wy0, wx0 * wy1, wx1 * wy1], dim=-1)
+    index = ((y0 * w + x0).long().unsqueeze(-1) + torch.tensor([0, 1, w, w + 1])).clamp_(0, h * w - 1)
+    return index, weight, seen
+
+
+def _cells(grid_shape: tuple) -> tuple:
+    """(cols (R*C,), rows (R*C,)) float32 cell coordinates of a grid, row-major."""
+    rows, cols = grid_shape
+    r, c = torch.meshgrid(torch.arange(rows, dtype=torch.float32), torch.arange(cols, dtype=torch.float32),
+                          indexing='ij')
+    return c.reshape(-1), r.reshape(-1)
+
+
 def warp_to_grid(features: torch.Tensor, feat_H_grid: torch.Tensor, grid_shape: tuple) -> tuple:
     """Sample feature maps at every BEV cell.
 
