@@ -5,16 +5,15 @@ Per view ``V`` in ``views`` (several drones per process), relative topics (``mat
 - subscribes ``V/<image_topic>`` (sensor_msgs/Image, or CompressedImage on ``V/image/compressed`` when
   ``compressed``), and ``V/<camera_info_topic>`` when no ``reference_dataset`` is configured (the images once
   that stream has a publisher, so that no CameraInfo is lost at start-up: ``matrix_ros.connect``);
-- publishes ``V/homography`` (matrix_msgs/HomographyStamped, the message form of
-  ``matrix_core.register.registration.Registration``, with the image's header stamp) and ``/diagnostics``
-  (status, confidence, inliers, reference, re-keying).
+- publishes ``V/homography`` (matrix_msgs/HomographyStamped, the message form of ``matrix_core.register.
+  registration.Registration``, the image's stamp) and ``/diagnostics`` (confidence, inliers, reference, ...).
 
 Reference: ``reference_dataset``'s ``reference/`` image and calibration of ``V`` (its
 ``matrix_tracker_meta.json`` also gives the obstacles, see ``matrix_core.register.scene``), or else the first
 image whose CameraInfo (``p = K [R | t]``) has the SAME stamp (``matrix_core.register.reference_pairing``).
-Failed and undecodable frames are published failed with their reason (never a made-up homography), so that
-the fuse node need not wait for them. In one process with calib (``matrix_ros.drone_link``) each image is
-decoded once, grey, and handed to calib with its registration.
+Failed and undecodable frames are published failed with their reason (never a made-up homography), so that the
+fuse node need not wait for them. In one process with calib (``matrix_ros.drone_link``) each image is decoded
+once, grey, and handed to calib with its registration. A reference dataset's first drone warms the process up.
 """
 
 from matrix_msgs.msg import HomographyStamped
@@ -28,6 +27,7 @@ from matrix_core.register.reference_pairing import FAIL, HOLD, REFERENCE, Refere
 from matrix_core.register.registrar import Registrar
 from matrix_core.register.registration import Registration
 from matrix_core.register.scene import settings_for_dataset
+from matrix_core.register.warm_up import warm_up_once
 from matrix_register.settings import RegisterNodeSettings
 from matrix_ros import diagnostics
 from matrix_ros.connect import SubscribeWhenConnected
@@ -85,7 +85,8 @@ class RegisterNode(Node):
         """The drone's reference (dataset's, or first frame with a CameraInfo); again when a replay restarts."""
         self.pairing[view], d = ReferencePairing(), self.dataset
         self.registrars.pop(view, None)
-        if d is not None:
+        if d is not None:   # the process's first registration pays for first calls: at start-up, not on a frame
+            warm_up_once(self.settings, d.reference_image(view), d.reference_camera(view), self.area, self.backend)
             self.registrars[view] = Registrar(self.settings, d.reference_image(view), d.reference_camera(view),
                                               self.area, f'{view}/reference', self.backend)
 
@@ -133,8 +134,7 @@ class RegisterNode(Node):
         try:
             result = self.registrars[view].register(image, stamp_text(header_stamp_ns(msg.header)))
         except ValueError as exc:
-            self._publish(view, msg.header, Registration.failed(f'bad input: {exc}', backend=self.backend.name))
-            return
+            return self._publish(view, msg.header, Registration.failed(f'bad input: {exc}', backend=self.backend.name))
         self._publish(view, msg.header, result, measured=True)
 
     def _publish(self, view: str, header, result: Registration, measured: bool = False) -> None:
