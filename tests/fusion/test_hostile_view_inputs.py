@@ -178,3 +178,21 @@ def test_early_decodes_are_bounded_and_a_bad_image_still_says_why(real):
         inputs.decode_early('D1', image_to_compressed(image[::8, ::8].copy()))
     inputs.decode_early('D1', small)
     assert len(inputs._early) == EARLY_KEPT and id(small) in inputs._early
+
+
+def test_images_deferred_while_an_earlier_frame_waits_are_decoded_after_it(real):
+    # fuse does not decode a later frame's images while an earlier frame waits for its registrations (they would
+    # take the cores from them); it decodes them once a frame was fused, and a frame fused first decodes its own
+    camera, image = real
+    inputs, geometry = _inputs(), _homography(camera)
+    assert inputs.view_input('D1', image_to_compressed(image), geometry, 'homography').usable   # learns the size
+    first, second = image_to_compressed(image), image_to_compressed(image)
+    inputs.decode_early('D1', first, defer=True)
+    inputs.decode_early('D2', second, defer=True)
+    assert not inputs._early and len(inputs._deferred) == 2   # nothing decoded yet
+    view = inputs.view_input('D1', first, geometry, 'homography')   # its frame came before the deferred decode
+    assert view.usable and view.network_image is None and len(inputs._deferred) == 1
+    inputs.decode_deferred()
+    assert not inputs._deferred and list(inputs._early) == [id(second)]   # only the one not used yet
+    view = inputs.view_input('D2', second, geometry, 'homography')
+    assert view.usable and view.network_image is not None and not inputs._early

@@ -114,3 +114,15 @@ def test_stamp_restart():
     r = StampRestart(2.0)
     assert [r.went_back(t) for t in (1.0, 5.0, 4.0, 3.5, 1.0, 1.5, 9.0, 6.9)] == \
         [False, False, False, False, True, False, False, True]
+
+
+def test_waiting_before_says_whether_an_earlier_frame_is_pending():
+    # fuse defers decoding a later frame's images while an earlier frame still waits for its homographies
+    sync = make(stamp_tolerance=0.01)
+    assert not sync.waiting_before(1.0)
+    sync.add('D1/image', 1.0, 'a', now=0.0)
+    assert not sync.waiting_before(1.0) and not sync.waiting_before(1.005)   # the same frame, within tolerance
+    assert sync.waiting_before(1.5) and not sync.waiting_before(0.5)
+    sync.add('D2/image', 1.0, 'b', now=0.1)
+    sync.add('D3/image', 1.0, 'c', now=0.2)   # complete: emitted, nothing earlier waits any more
+    assert not sync.waiting_before(1.5)

@@ -11,8 +11,8 @@ frame is fused when every view arrived or ``sync_timeout`` wall seconds after it
 stalls the graph), by ``matrix_core.fusion`` (``view_inputs``, ``fuser.BevFuser``). Every fused frame publishes
 (``matrix_ros.fusion_messages``) tracks, detections (id 0), RViz markers (while subscribed), the BEV heatmap,
 ``/diagnostics`` and per drone the tracks' image boxes (``matrix_ros.image_outputs``; optionally an overlay). Bad
-input is logged and the view counts as missing. ``~/reset`` (std_srvs/Trigger) starts fresh, and so does the node when
-stamps go back by more than ``tracker_reset_gap_s`` (a replay restarted).
+input is logged and the view counts as missing. ``~/reset`` (std_srvs/Trigger) starts fresh, as when stamps go back
+by more than ``tracker_reset_gap_s`` (a replay restarted). Images are decoded as they arrive (``decode_early``).
 """
 
 import time
@@ -95,12 +95,11 @@ class FuseNode(Node):
     def _add(self, view: str, part: str, msg) -> None:
         stamp, now = stamp_to_seconds(msg.header.stamp), time.monotonic()
         if self.last_fused is not None and stamp < self.last_fused - self.settings.tracker_reset_gap_s:
-            # A replay restarted or the clock jumped back: a new sequence, not late messages.
-            self.get_logger().warning(f't={stamp:.3f} s is {self.last_fused - stamp:.1f} s before the last fused '
-                                      f'frame: time went back, starting fresh')
+            self.get_logger().warning(f't={stamp:.3f} s is {self.last_fused - stamp:.1f} s before the last fused frame: '
+                                      'time went back, starting fresh (a replay restarted: a new sequence)')
             self._start_fresh()
-        if part == 'image':   # decoded now, while the drones still work on this frame (ViewInputs.decode_early)
-            self.inputs.decode_early(view, msg)
+        if part == 'image':   # decoded now, while the drones work on this frame, or after an earlier frame fused
+            self.inputs.decode_early(view, msg, defer=self.sync.waiting_before(stamp))
         frames = self.sync.add(f'{view}/{part}', stamp, msg, now)
         if self.sync.late_items > self.late_reported:
             self.late_reported = self.sync.late_items
@@ -144,7 +143,8 @@ class FuseNode(Node):
             self.get_logger().info(f't={frame.stamp:.3f} s: reset {" and ".join(result.resets)} state')
         self.pubs['diagnostics'].publish(out.fuse_diagnostics(header, frame, result, time.monotonic() - frame.first_arrival, latency,
                                                               self.sync.late_items, self.frames_published))
-        self.fuser.prepare_next()   # published: now the next frame's share of this one (its latency is spared it)
+        self.inputs.decode_deferred()   # published: now the images of the next frames, and the next frame's share
+        self.fuser.prepare_next()       # of this one (its latency is spared both)
 
     def _on_reset(self, request, response):
         self._start_fresh()

@@ -62,11 +62,17 @@ class ViewInputs:
         self.input_size, self.min_confidence, self.reduced_decode = input_size, min_confidence, reduced_decode
         self.full_size = {}   # view -> (w, h) of its last fully decoded image
         self._early = {}      # id(msg) -> (msg, (image, r, full size), network input): made on arrival, not used yet
+        self._deferred = {}   # id(msg) -> (view, msg): arrived while an earlier frame waited, not decoded yet
 
-    def decode_early(self, view: str, msg) -> None:
+    def decode_early(self, view: str, msg, defer: bool = False) -> None:
         """Decode ``msg``, one of ``view``'s images, now; :meth:`view_input` takes it from here. A message that
-        does not decode is left for :meth:`view_input`, which says why the view is missing."""
+        does not decode is left for :meth:`view_input`, which says why the view is missing. ``defer`` (an earlier
+        frame still waits for its homographies): keep it for :meth:`decode_deferred` instead, so that the decode
+        does not take the cores from the registrations that earlier frame waits for."""
         if msg is None or isinstance(msg, ImageNotSent):
+            return
+        if defer:
+            self._deferred[id(msg)] = (view, msg)
             return
         try:
             decoded = self._decode(view, msg)
@@ -76,6 +82,12 @@ class ViewInputs:
         self._early[id(msg)] = (msg, decoded, network_image)   # the message kept: its id stays unique
         while len(self._early) > EARLY_KEPT:
             del self._early[next(iter(self._early))]
+
+    def decode_deferred(self) -> None:
+        """Decode now the images :meth:`decode_early` deferred (a frame was just fused)."""
+        deferred, self._deferred = self._deferred, {}
+        for view, msg in deferred.values():
+            self.decode_early(view, msg)
 
     def frame_views(self, items: dict, views: list, geometry_name: str) -> dict | None:
         """Every view's :class:`ViewInput` from a synchronised frame's items (``'V/image'``, ``'V/geometry'``);
@@ -91,6 +103,7 @@ class ViewInputs:
         if isinstance(image_msg, ImageNotSent):
             return ViewInput(reason=NOT_SENT)
         _, early, network_image = self._early.pop(id(image_msg), (None, None, None))
+        self._deferred.pop(id(image_msg), None)   # its frame came before its deferred decode: decoded below
         if image_msg is None or geometry_msg is None:
             return ViewInput(reason='no ' + ' and no '.join(
                 p for p, x in (('image', image_msg), (geometry_name, geometry_msg)) if x is None))

@@ -128,6 +128,10 @@ class FrameSynchronizer:
     def pending_stamps(self) -> list:
         return [p.stamp for p in self._pending]
 
+    def waiting_before(self, stamp: float) -> bool:
+        """Whether a frame earlier than ``stamp`` (by more than the stamp tolerance) is still pending."""
+        return any(p.stamp < stamp - self.settings.stamp_tolerance for p in self._pending)
+
     def _emit(self, pending: _Pending, reason: str) -> SyncedFrame:
         self._pending.remove(pending)
         self._last_emitted = pending.stamp
