@@ -86,9 +86,9 @@ class RegisterNode(Node):
         self.pairing[view], d = ReferencePairing(), self.dataset
         self.registrars.pop(view, None)
         if d is not None:   # the process's first registration pays for first calls: at start-up, not on a frame
-            warm_up_once(self.settings, d.reference_image(view), d.reference_camera(view), self.area, self.backend)
-            self.registrars[view] = Registrar(self.settings, d.reference_image(view), d.reference_camera(view),
-                                              self.area, f'{view}/reference', self.backend)
+            image, camera, name = d.reference_image(view), d.reference_camera(view), f'{view}/reference'
+            warm_up_once(self.settings, image, camera, self.area, self.backend)
+            self.registrars[view] = Registrar(self.settings, image, camera, self.area, name, self.backend)
 
     def _on_image(self, view: str, msg) -> None:
         try:

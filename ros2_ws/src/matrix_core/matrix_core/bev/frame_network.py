@@ -168,7 +168,7 @@ class FrameNetwork:
         The lifting samples as ``F.grid_sample`` on :func:`sampling_grid` does, but gathers each tap's C channels as
         one row of the channels-last features (:func:`lifting_taps`, ``F.embedding_bag``), and the pooled maps are
         written into one channels-last buffer, the aggregation's input: no concatenation and no layout copies.
-        On one core, 8 views: taps 4 + lifting and pooling 3 ms against 5 + 13.6 + 7 (sampling grids, grid_sample,
+        On one core, 8 views: taps 5 + lifting and pooling 3 ms against 5 + 13.6 + 7 (sampling grids, grid_sample,
         concatenation and copies) before."""
         k, c, h, w = feats.shape
         index = torch.cat([t[0] + i * h * w for i, t in enumerate(taps)])

@@ -46,10 +46,10 @@ def feat_H_grid(img_H_ground: np.ndarray, ground_H_grid: np.ndarray, image_size:
     return feat_H_img @ img_H_ground @ ground_H_grid
 
 
-def sampling_grid(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tuple) -> tuple:
-    """Where :func:`warp_to_grid` samples: (grid (N, rows, cols, 2) for ``F.grid_sample`` (align_corners=False),
-    seen (N, 1, rows, cols) float). ``feat_H_grid`` (N, 3, 3) as in :func:`warp_to_grid`, ``feat_size`` (h, w)
-    of the feature maps. A cell not seen gets a grid point far outside the map (sampled as 0)."""
+def _feature_points(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tuple) -> tuple:
+    """(u, v, seen), each (N, rows * cols): the feature pixel every cell projects to, and whether it lies in front
+    of the camera and inside the (h, w) = ``feat_size`` map. The one projection :func:`sampling_grid` and
+    :func:`lifting_taps` share."""
     h, w = feat_size
     rows, cols = grid_shape
     dt = feat_H_grid.dtype if feat_H_grid.is_floating_point() else torch.float32
@@ -59,12 +59,22 @@ def sampling_grid(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tuple
     depth = uvw[..., 2]
     in_front = depth > 1e-9
     uv = uvw[..., :2] / torch.where(in_front, depth, torch.ones_like(depth)).unsqueeze(-1)
-    inside = in_front & (uv[..., 0] >= -0.5) & (uv[..., 0] <= w - 0.5) & (uv[..., 1] >= -0.5) & (uv[..., 1] <= h - 0.5)
+    u, v = uv[..., 0], uv[..., 1]
+    return u, v, in_front & (u >= -0.5) & (u <= w - 0.5) & (v >= -0.5) & (v <= h - 0.5)
+
+
+def sampling_grid(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tuple) -> tuple:
+    """Where :func:`warp_to_grid` samples: (grid (N, rows, cols, 2) for ``F.grid_sample`` (align_corners=False),
+    seen (N, 1, rows, cols) float). ``feat_H_grid`` (N, 3, 3) as in :func:`warp_to_grid`, ``feat_size`` (h, w)
+    of the feature maps. A cell not seen gets a grid point far outside the map (sampled as 0)."""
+    h, w = feat_size
+    rows, cols = grid_shape
+    u, v, inside = _feature_points(feat_H_grid, feat_size, grid_shape)
     # grid_sample with align_corners=False: -1 and +1 are the outer edges of the border pixels.
-    norm = torch.stack([(uv[..., 0] + 0.5) / w * 2 - 1, (uv[..., 1] + 0.5) / h * 2 - 1], dim=-1)
+    norm = torch.stack([(u + 0.5) / w * 2 - 1, (v + 0.5) / h * 2 - 1], dim=-1)
     norm = torch.where(inside.unsqueeze(-1), norm, torch.full_like(norm, -2.0))
     n = feat_H_grid.shape[0]
-    return norm.reshape(n, rows, cols, 2), inside.reshape(n, 1, rows, cols).to(dt)
+    return norm.reshape(n, rows, cols, 2), inside.reshape(n, 1, rows, cols).to(u.dtype)
 
 
 def lifting_taps(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tuple) -> tuple:
@@ -87,13 +97,7 @@ def lifting_taps(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tuple)
     here), each tap's C channels one contiguous row of channels-last maps.
     """
     h, w = feat_size
-    cells = _cells(grid_shape)
-    m = feat_H_grid[:, :, :, None]
-    x, y, depth = (m[:, i, 0] * cells[0] + m[:, i, 1] * cells[1] + m[:, i, 2] for i in range(3))   # (N, R*C) each
-    in_front = depth > 1e-9
-    depth = torch.where(in_front, depth, torch.ones_like(depth))
-    u, v = x / depth, y / depth
-    seen = in_front & (u >= -0.5) & (u <= w - 0.5) & (v >= -0.5) & (v <= h - 0.5)
+    u, v, seen = _feature_points(feat_H_grid, feat_size, grid_shape)
     u, v = torch.where(seen, u, -1.0), torch.where(seen, v, -1.0)   # far points: no overflow below
     x0, y0 = u.floor(), v.floor()
     fx, fy = u - x0, v - y0
@@ -103,14 +107,6 @@ def lifting_taps(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tuple)
     weight = torch.stack([wx0 * wy0, wx1 * wy0, wx0 * wy1, wx1 * wy1], dim=-1)
     index = ((y0 * w + x0).long().unsqueeze(-1) + torch.tensor([0, 1, w, w + 1])).clamp_(0, h * w - 1)
     return index, weight, seen
-
-
-def _cells(grid_shape: tuple) -> tuple:
-    """(cols (R*C,), rows (R*C,)) float32 cell coordinates of a grid, row-major."""
-    rows, cols = grid_shape
-    r, c = torch.meshgrid(torch.arange(rows, dtype=torch.float32), torch.arange(cols, dtype=torch.float32),
-                          indexing='ij')
-    return c.reshape(-1), r.reshape(-1)
 
 
 def warp_to_grid(features: torch.Tensor, feat_H_grid: torch.Tensor, grid_shape: tuple) -> tuple:
