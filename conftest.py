@@ -44,9 +44,11 @@ def install_dir() -> Path:
 @pytest.fixture(scope='session')
 def node_executable(install_dir):
     """node_executable(package, name) -> path of a colcon-installed node, as `ros2 run` would find it."""
+
     def find(package: str, name: str) -> Path:
         path = install_dir / package / 'lib' / package / name
         if not path.is_file():
             pytest.fail(f'{path} not built: run `make build`')
         return path
+
     return find

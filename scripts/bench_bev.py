@@ -44,27 +44,31 @@ def main() -> int:
         model, settings = load_model(args.checkpoint)
         args.model = settings.model
     else:
-        settings = BevSettings(model=args.model, image_width=args.width, image_height=args.height,
-                               cell_m=args.cell_m)
+        settings = BevSettings(model=args.model, image_width=args.width, image_height=args.height, cell_m=args.cell_m)
         model = build_model(args.model)
     data = BevFrames(Path(args.dataset), settings)
     n_params = sum(q.numel() for q in model.parameters())
-    print(f'model {args.model}: {n_params / 1e6:.2f} M parameters; input {settings.image_width}x{settings.image_height}, '
-          f'{len(data.views)} views, grid {data.grid.shape[1]}x{data.grid.shape[0]} cells of {settings.cell_m} m; '
-          f'torch threads {args.threads}')
+    print(
+        f'model {args.model}: {n_params / 1e6:.2f} M parameters; input {settings.image_width}x{settings.image_height}, '
+        f'{len(data.views)} views, grid {data.grid.shape[1]}x{data.grid.shape[0]} cells of {settings.cell_m} m; '
+        f'torch threads {args.threads}'
+    )
     frames = [data.frames[i % len(data.frames)] for i in range(args.frames + 1)]
-    inputs = [data.inputs(f) for f in frames]          # decode/resize outside the timing
+    inputs = [data.inputs(f) for f in frames]  # decode/resize outside the timing
     model.eval()
     times, previous = [], None
     with torch.no_grad():
         for x in inputs:
             t0 = time.perf_counter()
-            previous = model(x['images'][None], x['feat_H_grid'][None], x['view_mask'][None], data.grid.shape,
-                             previous)['bev']
+            previous = model(
+                x['images'][None], x['feat_H_grid'][None], x['view_mask'][None], data.grid.shape, previous
+            )['bev']
             times.append(time.perf_counter() - t0)
-    fwd = np.array(times[1:])                          # the first call warms up
-    print(f'model forward per frame (8 views, {settings.image_width}x{settings.image_height}): mean '
-          f'{1000 * fwd.mean():.0f} ms, min {1000 * fwd.min():.0f} ms')
+    fwd = np.array(times[1:])  # the first call warms up
+    print(
+        f'model forward per frame (8 views, {settings.image_width}x{settings.image_height}): mean '
+        f'{1000 * fwd.mean():.0f} ms, min {1000 * fwd.min():.0f} ms'
+    )
     runner = SequenceRunner(model, settings, data.grid)
     times = []
     for f, x in zip(frames, inputs):
@@ -72,20 +76,24 @@ def main() -> int:
         runner.step(f, x['images'], x['feat_H_grid'], x['view_mask'])
         times.append(time.perf_counter() - t0)
     fwd = np.array(times[1:])
-    print(f'forward + decode per frame (8 views): mean {1000 * fwd.mean():.0f} ms, min {1000 * fwd.min():.0f} ms '
-          f'-> {1 / fwd.mean():.2f} frames/s')
+    print(
+        f'forward + decode per frame (8 views): mean {1000 * fwd.mean():.0f} ms, min {1000 * fwd.min():.0f} ms '
+        f'-> {1 / fwd.mean():.2f} frames/s'
+    )
     sizes = [data.dataset.load_image(v, frames[0]) for v in data.views]
     t0 = time.perf_counter()
     for img in sizes:
         prepare_image(img, (settings.image_width, settings.image_height))
-    print(f'image preparation (resize + normalise, {sizes[0].shape[1]}x{sizes[0].shape[0]} -> input) per frame '
-          f'(8 views): {1000 * (time.perf_counter() - t0):.0f} ms')
+    print(
+        f'image preparation (resize + normalise, {sizes[0].shape[1]}x{sizes[0].shape[0]} -> input) per frame '
+        f'(8 views): {1000 * (time.perf_counter() - t0):.0f} ms'
+    )
     config = TrainConfig(train=[SequenceSpec(args.dataset)], bev=settings, view_dropout=0.0)
     opt = torch.optim.AdamW(model.parameters(), lr=1e-3)
     rng = np.random.default_rng(0)
     model.train()
     for _ in range(len(data)):
-        data[_]                                        # fill the image cache
+        data[_]  # fill the image cache
     times = []
     for step in range(args.steps + 1):
         t0 = time.perf_counter()
@@ -95,8 +103,10 @@ def main() -> int:
         opt.step()
         times.append(time.perf_counter() - t0)
     tr = np.array(times[1:])
-    print(f'training step (batch 1, with the previous frame\'s forward for temporal fusion): mean {tr.mean():.2f} s '
-          f'-> {1 / tr.mean():.2f} samples/s')
+    print(
+        f'training step (batch 1, with the previous frame\'s forward for temporal fusion): mean {tr.mean():.2f} s '
+        f'-> {1 / tr.mean():.2f} samples/s'
+    )
     return 0
 
 

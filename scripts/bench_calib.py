@@ -60,14 +60,17 @@ def bench(dataset, scale, repeat, settings):
                     ctr.append(e[1])
     t = np.array(times) * 1000
     size = f'{scene.image_size[0]}x{scene.image_size[1]}'
-    line = (f'{size}: {len(t)} frames, time per frame median {np.median(t):.0f} ms, '
-            f'p95 {np.percentile(t, 95):.0f} ms, max {t.max():.0f} ms; ok {statuses.count(OK)}, '
-            f'stale {statuses.count("stale")}, failed {statuses.count("failed")}, tracked {tracked} '
-            f'(stage medians: ' + ', '.join(f'{k} {np.median(v):.0f} ms' for k, v in stages.items() if k != 'total')
-            + ')')
+    line = (
+        f'{size}: {len(t)} frames, time per frame median {np.median(t):.0f} ms, '
+        f'p95 {np.percentile(t, 95):.0f} ms, max {t.max():.0f} ms; ok {statuses.count(OK)}, '
+        f'stale {statuses.count("stale")}, failed {statuses.count("failed")}, tracked {tracked} '
+        f'(stage medians: ' + ', '.join(f'{k} {np.median(v):.0f} ms' for k, v in stages.items() if k != 'total') + ')'
+    )
     if rot:
-        line += (f'; ok frames vs stored: rotation median {np.median(rot):.3f} deg (max {max(rot):.3f}), '
-                 f'centre median {np.median(ctr) * 100:.1f} cm (max {max(ctr) * 100:.1f})')
+        line += (
+            f'; ok frames vs stored: rotation median {np.median(rot):.3f} deg (max {max(rot):.3f}), '
+            f'centre median {np.median(ctr) * 100:.1f} cm (max {max(ctr) * 100:.1f})'
+        )
     print(line, flush=True)
 
 
@@ -84,19 +87,23 @@ def bench_sim(frames: int, overrides: dict):
             rows = calibrate_dataset(open_dataset(data), Path(tmp) / 'calib', settings, compare=True)
         s = summarize_errors(rows)
         t = np.array([r['time_s'] for r in rows]) * 1000
-        print(f"sim {variant}: {s['frames']} images ({frames} frames x 8 drones): ok {s['ok']}, stale {s['stale']}, "
-              f"failed {s['failed']}; rotation median {s.get('rot_median_deg', float('nan')):.3f} deg "
-              f"(max {s.get('rot_max_deg', float('nan')):.3f}), centre median "
-              f"{100 * s.get('centre_median_m', float('nan')):.1f} cm "
-              f"(max {100 * s.get('centre_max_m', float('nan')):.1f}); "
-              f"time median {np.median(t):.0f} ms, p95 {np.percentile(t, 95):.0f} ms", flush=True)
+        print(
+            f"sim {variant}: {s['frames']} images ({frames} frames x 8 drones): ok {s['ok']}, stale {s['stale']}, "
+            f"failed {s['failed']}; rotation median {s.get('rot_median_deg', float('nan')):.3f} deg "
+            f"(max {s.get('rot_max_deg', float('nan')):.3f}), centre median "
+            f"{100 * s.get('centre_median_m', float('nan')):.1f} cm "
+            f"(max {100 * s.get('centre_max_m', float('nan')):.1f}); "
+            f"time median {np.median(t):.0f} ms, p95 {np.percentile(t, 95):.0f} ms",
+            flush=True,
+        )
 
 
 def main():
     root = Path(__file__).resolve().parent.parent
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument('--dataset', default=os.environ.get('MATRIX_SHARED', str(root.parent / 'shared'))
-                        + '/matrix_sample')
+    parser.add_argument(
+        '--dataset', default=os.environ.get('MATRIX_SHARED', str(root.parent / 'shared')) + '/matrix_sample'
+    )
     parser.add_argument('--scales', type=float, nargs='*', default=[1.0, 0.5])
     parser.add_argument('--repeat', type=int, default=1)
     parser.add_argument('--sim-frames', type=int, default=0, help='also run the simulated acceptance (0 = off)')
@@ -107,8 +114,10 @@ def main():
     overrides = {k: v for k, v in vars(settings).items() if k != 'config' and v != getattr(CalibSettings(), k)}
     cv2.setNumThreads(1)  # one core, as on each drone's computer
     dataset = MatrixDataset(args.dataset)
-    print(f'bench_calib: {dataset.root}, {len(dataset.views)} drones x {len(dataset.frames)} frames, '
-          f'1 OpenCV thread, {settings}')
+    print(
+        f'bench_calib: {dataset.root}, {len(dataset.views)} drones x {len(dataset.frames)} frames, '
+        f'1 OpenCV thread, {settings}'
+    )
     for scale in args.scales:
         bench(dataset, scale, args.repeat, settings)
     if args.sim_frames:

@@ -47,26 +47,35 @@ def run_once(args, bag: Path, views: list, rate_mbit: float, out: Path) -> dict:
     from matrix_bringup.graph import BagFacts, GraphSettings
     from matrix_bringup.netns_harness import GROUND, Hosts
 
-    settings = GraphSettings(bag=str(bag), dataset=str(args.dataset), views=views, lockstep=False,
-                             rate=args.replay_rate, sync_timeout=args.sync_timeout, record=str(out / 'rec'))
+    settings = GraphSettings(
+        bag=str(bag),
+        dataset=str(args.dataset),
+        views=views,
+        lockstep=False,
+        rate=args.replay_rate,
+        sync_timeout=args.sync_timeout,
+        record=str(out / 'rec'),
+    )
     d = deployment(settings, BagFacts.read(str(bag), views), link_mbit=args.link_share * rate_mbit)
     logs = out / 'logs'
     with Hosts(views, rate_mbit=rate_mbit, multicast=args.discovery == 'multicast') as hosts:
-        procs = start(d, hosts, logs, args.discovery, image_probes=views[:1], captures=views[:1],
-                      player_lead_s=args.player_lead)
-        time.sleep(max(0.0, args.player_lead - 1.0))   # to just before the first frame: count the replay only
+        procs = start(
+            d, hosts, logs, args.discovery, image_probes=views[:1], captures=views[:1], player_lead_s=args.player_lead
+        )
+        time.sleep(max(0.0, args.player_lead - 1.0))  # to just before the first frame: count the replay only
         before = {v: hosts.link_bytes(v) for v in views}
         before_t = time.time()
         players = [p for label, p in procs.items() if label.endswith('bag_player')]
         deadline = time.monotonic() + args.timeout
         while any(p.poll() is None for p in players) and time.monotonic() < deadline:
             time.sleep(0.5)
-        last = round(1.0 + 0.5 * (args.frames - 1), 6)   # the bag's sequence clock
-        deadline = time.monotonic() + 30.0   # the last frame, queued on a slow link, is fused (or times out)
+        last = round(1.0 + 0.5 * (args.frames - 1), 6)  # the bag's sequence clock
+        deadline = time.monotonic() + 30.0  # the last frame, queued on a slow link, is fused (or times out)
         while time.monotonic() < deadline and not any(
-                line['kind'] == 'fuse' and line['stamp'] == last for line in read_probe(logs / 'ground_probe.log')):
+            line['kind'] == 'fuse' and line['stamp'] == last for line in read_probe(logs / 'ground_probe.log')
+        ):
             time.sleep(0.5)
-        time.sleep(1.0)   # the recorder writes it
+        time.sleep(1.0)  # the recorder writes it
         after = {v: hosts.link_bytes(v) for v in views}
         udp = hosts.udp_errors(GROUND)
         hosts.stop_all()
@@ -77,24 +86,31 @@ def run_once(args, bag: Path, views: list, rate_mbit: float, out: Path) -> dict:
     images = {line['stamp']: line for line in read_probe(logs / f'{views[0]}_probe.log') if line['kind'] == 'image'}
     latency = np.array([tracks[s] - images[s]['t'] for s in images if s in tracks])
     captured = read_probe(logs / f'{views[0]}_capture.log')
-    return {'streams': _per_frame(next(c for c in reversed(captured) if c['t'] <= before_t), captured[-1], played),
-            'lost': sum(any('no image' in why for why in f['missing'].values()) for f in fused.values()),
-        'rate_mbit': rate_mbit, 'frames': played, 'with_tracks': len(tracks),
+    return {
+        'streams': _per_frame(next(c for c in reversed(captured) if c['t'] <= before_t), captured[-1], played),
+        'lost': sum(any('no image' in why for why in f['missing'].values()) for f in fused.values()),
+        'rate_mbit': rate_mbit,
+        'frames': played,
+        'with_tracks': len(tracks),
         'sender_dropped': sum(line['outcome'] == 'dropped' for line in sender) / len(views),
         'all_views': sum(f['views_used'] == len(views) for f in fused.values()),
         'up_kb': np.mean([(after[v]['up'][0] - before[v]['up'][0]) / played / 1e3 for v in views]),
         'down_kb': np.mean([(after[v]['down'][0] - before[v]['down'][0]) / played / 1e3 for v in views]),
         'jpeg_kb': np.mean([i['bytes'] for i in images.values()]) / 1e3 if images else float('nan'),
-        'dropped': sum(after[v]['dropped'] for v in views), 'rcvbuf_errors': udp.get('RcvbufErrors', 0),
-        'latency': latency, 'players_ok': all(p.returncode == 0 for p in players)}
+        'dropped': sum(after[v]['dropped'] for v in views),
+        'rcvbuf_errors': udp.get('RcvbufErrors', 0),
+        'latency': latency,
+        'players_ok': all(p.returncode == 0 for p in players),
+    }
 
 
 def _per_frame(first: dict, last: dict, frames: int) -> list:
     """The capture's totals between two of its lines, per frame: [(direction, peer, stream, kind, bytes)]."""
     key = ('direction', 'peer', 'stream', 'kind')
     start = {tuple(r[k] for k in key): r['bytes'] for r in first['streams']}
-    rows = [(*(r[k] for k in key), (r['bytes'] - start.get(tuple(r[k] for k in key), 0)) / frames)
-            for r in last['streams']]
+    rows = [
+        (*(r[k] for k in key), (r['bytes'] - start.get(tuple(r[k] for k in key), 0)) / frames) for r in last['streams']
+    ]
     return sorted((r for r in rows if r[-1] > 0), key=lambda r: (r[0] != 'down', -r[-1]))
 
 
@@ -117,9 +133,12 @@ def print_streams(row: dict, drone: str, smallest: float = 50.0) -> None:
 
 def keeps(row: dict, reference: dict, args) -> bool:
     """The rate of ``row`` keeps the replay rate (see the module docstring)."""
-    return (row['with_tracks'] == row['frames'] and row['lost'] <= args.max_lost * row['frames']
-            and len(row['latency']) > 0
-            and np.percentile(row['latency'], 95) <= np.percentile(reference['latency'], 95) + args.latency_margin)
+    return (
+        row['with_tracks'] == row['frames']
+        and row['lost'] <= args.max_lost * row['frames']
+        and len(row['latency']) > 0
+        and np.percentile(row['latency'], 95) <= np.percentile(reference['latency'], 95) + args.latency_margin
+    )
 
 
 def find_min_rate(args, run) -> tuple:
@@ -130,7 +149,7 @@ def find_min_rate(args, run) -> tuple:
     if not keeps(reference, reference, args):
         return rows, None
     best = reference['rate_mbit']
-    need = reference['up_kb'] * 8e-3 * 2 * args.replay_rate   # Mbit/s a drone sent at the reference
+    need = reference['up_kb'] * 8e-3 * 2 * args.replay_rate  # Mbit/s a drone sent at the reference
     low, high = 0.0, best
     rate = _round_up(1.1 * need, args.resolution)
     while high - low > args.resolution and len(rows) < args.max_runs:
@@ -144,7 +163,7 @@ def find_min_rate(args, run) -> tuple:
             high = best = rate
         else:
             low = rate
-        rate = 0.0   # bisect from here on
+        rate = 0.0  # bisect from here on
     return rows, best
 
 
@@ -153,52 +172,84 @@ def _round_up(x: float, step: float) -> float:
 
 
 def print_table(rows: list, views: list, args) -> None:
-    print(f'\n{len(views)} drone hosts + ground, real sample frames back and forth, {len(args.frame_list)} frames '
-          f'at {2 * args.replay_rate:g} frames/s, discovery {args.discovery}, sync_timeout {args.sync_timeout} s')
+    print(
+        f'\n{len(views)} drone hosts + ground, real sample frames back and forth, {len(args.frame_list)} frames '
+        f'at {2 * args.replay_rate:g} frames/s, discovery {args.discovery}, sync_timeout {args.sync_timeout} s'
+    )
     share = f'images within {args.link_share:.0%} of the link' if args.link_share else 'no image budget'
     print(f'{share} (link_sender)')
-    print('| Mbit/s per link | bytes/frame/drone up (down) | JPEG per image | frames dropped at the sender, per drone '
-          '| tbf drops | latency image -> tracks median / p95 / max | frames with tracks | fused with all views '
-          '| frames with an image lost |')
+    print(
+        '| Mbit/s per link | bytes/frame/drone up (down) | JPEG per image | frames dropped at the sender, per drone '
+        '| tbf drops | latency image -> tracks median / p95 / max | frames with tracks | fused with all views '
+        '| frames with an image lost |'
+    )
     print('| --- | --- | --- | --- | --- | --- | --- | --- | --- |')
     for r in rows:
         lat = r['latency']
-        lat_text = (f'{np.median(lat) * 1e3:.0f} / {np.percentile(lat, 95) * 1e3:.0f} / {lat.max() * 1e3:.0f} ms'
-                    if len(lat) else 'none')
-        print(f"| {r['rate_mbit']:g} | {r['up_kb']:.0f} kB ({r['down_kb']:.1f} kB) | {r['jpeg_kb']:.0f} kB | "
-              f"{r['sender_dropped']:g}/{r['frames']} | {r['dropped']} | {lat_text} | {r['with_tracks']}/{r['frames']} | "
-              f"{r['all_views']}/{r['frames']} | {r['lost']}/{r['frames']} |")
-    print(f"(ground UDP receive-buffer errors: {', '.join(str(r['rcvbuf_errors']) for r in rows)}; "
-          f"players finished: {', '.join(str(r['players_ok']) for r in rows)})")
+        lat_text = (
+            f'{np.median(lat) * 1e3:.0f} / {np.percentile(lat, 95) * 1e3:.0f} / {lat.max() * 1e3:.0f} ms'
+            if len(lat)
+            else 'none'
+        )
+        print(
+            f"| {r['rate_mbit']:g} | {r['up_kb']:.0f} kB ({r['down_kb']:.1f} kB) | {r['jpeg_kb']:.0f} kB | "
+            f"{r['sender_dropped']:g}/{r['frames']} | {r['dropped']} | {lat_text} | {r['with_tracks']}/{r['frames']} | "
+            f"{r['all_views']}/{r['frames']} | {r['lost']}/{r['frames']} |"
+        )
+    print(
+        f"(ground UDP receive-buffer errors: {', '.join(str(r['rcvbuf_errors']) for r in rows)}; "
+        f"players finished: {', '.join(str(r['players_ok']) for r in rows)})"
+    )
 
 
 def main(argv=None) -> int:
     from matrix_bringup.distributed import DISCOVERY, back_and_forth, write_replay_bag
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument('--dataset', type=Path, default=Path(os.environ.get('MATRIX_SHARED', ROOT.parent / 'shared'))
-                        / 'matrix_sample', help='the real sample (default: $MATRIX_SHARED/matrix_sample)')
+    parser.add_argument(
+        '--dataset',
+        type=Path,
+        default=Path(os.environ.get('MATRIX_SHARED', ROOT.parent / 'shared')) / 'matrix_sample',
+        help='the real sample (default: $MATRIX_SHARED/matrix_sample)',
+    )
     parser.add_argument('--drones', type=int, default=8, help='drone hosts D1..Dn (default 8)')
     parser.add_argument('--rate_mbit', type=float, nargs='+', default=[20.0], help='link rates, one run each')
     parser.add_argument('--frames', type=int, default=40, help='frames replayed (default 40: 20 s at 2 Hz)')
     parser.add_argument('--replay_rate', type=float, default=1.0, help='1 = the recorded 2 frames/s')
     parser.add_argument('--sync_timeout', type=float, default=1.0, help="fuse's wait for a late view (s)")
-    parser.add_argument('--link_share', type=float, default=0.9,
-                        help="share of each link's rate the images may use (link_sender's budget; the rest: "
-                             'geometry, diagnostics, discovery); 0: no budget, every frame is sent')
-    parser.add_argument('--discovery', choices=tuple(DISCOVERY), default='multicast',
-                        help='how hosts find each other (matrix_bringup.distributed.DISCOVERY)')
-    parser.add_argument('--find-min-rate', dest='find_min_rate', action='store_true',
-                        help='search the lowest link rate that keeps the replay rate (module docstring)')
+    parser.add_argument(
+        '--link_share',
+        type=float,
+        default=0.9,
+        help="share of each link's rate the images may use (link_sender's budget; the rest: "
+        'geometry, diagnostics, discovery); 0: no budget, every frame is sent',
+    )
+    parser.add_argument(
+        '--discovery',
+        choices=tuple(DISCOVERY),
+        default='multicast',
+        help='how hosts find each other (matrix_bringup.distributed.DISCOVERY)',
+    )
+    parser.add_argument(
+        '--find-min-rate',
+        dest='find_min_rate',
+        action='store_true',
+        help='search the lowest link rate that keeps the replay rate (module docstring)',
+    )
     parser.add_argument('--resolution', type=float, default=1.0, help='Mbit/s the search stops at')
     parser.add_argument('--max_runs', type=int, default=5, help='runs the search may take, the reference included')
     parser.add_argument('--max_lost', type=float, default=0.1, help='share of frames that may lose an image')
-    parser.add_argument('--latency_margin', type=float, default=0.5,
-                        help='s the p95 latency may exceed the reference run')
+    parser.add_argument(
+        '--latency_margin', type=float, default=0.5, help='s the p95 latency may exceed the reference run'
+    )
     parser.add_argument('--timeout', type=float, default=600.0, help='seconds a run may take')
-    parser.add_argument('--player_lead', type=float, default=10.0,
-                        help='s from all hosts ready to the first frame (longer on a loaded machine: a player '
-                             'not up by then skips the frames due before)')
+    parser.add_argument(
+        '--player_lead',
+        type=float,
+        default=10.0,
+        help='s from all hosts ready to the first frame (longer on a loaded machine: a player '
+        'not up by then skips the frames due before)',
+    )
     parser.add_argument('--out', type=Path, default=ROOT / 'out' / 'bench_distributed')
     parser.add_argument('--layout', action='store_true', help='print what runs where and what crosses each link')
     args = parser.parse_args(argv)
@@ -206,14 +257,16 @@ def main(argv=None) -> int:
     from matrix_bringup.netns_harness import unavailable
     from matrix_core.datasets.matrix_conventions import MATRIX_VIEWS
 
-    views = list(MATRIX_VIEWS)[:args.drones]
+    views = list(MATRIX_VIEWS)[: args.drones]
     args.frame_list = back_and_forth(5, args.frames)
     if args.layout:
         from matrix_bringup.deployment import deployment
         from matrix_bringup.graph import BagFacts, GraphSettings
+
         facts = BagFacts(compressed=True, frames=args.frames, has_ground_truth=True)
-        print(deployment(GraphSettings(bag='BAG', dataset=str(args.dataset), views=views, record='REC'), facts)
-              .describe())
+        print(
+            deployment(GraphSettings(bag='BAG', dataset=str(args.dataset), views=views, record='REC'), facts).describe()
+        )
         return 0
     reason = unavailable()
     if reason:
@@ -227,8 +280,9 @@ def main(argv=None) -> int:
     def run(rate):
         run_dir = args.out / f'{rate:g}mbit_{time.strftime("%H%M%S")}'
         row = run_once(args, bag, views, rate, run_dir)
-        print(f'{rate:g} Mbit/s: logs in {run_dir}/logs; {row["lost"]}/{row["frames"]} frames lost an image',
-              flush=True)
+        print(
+            f'{rate:g} Mbit/s: logs in {run_dir}/logs; {row["lost"]}/{row["frames"]} frames lost an image', flush=True
+        )
         return row
 
     if args.find_min_rate:
@@ -238,10 +292,16 @@ def main(argv=None) -> int:
     print_table(rows, views, args)
     print_streams(rows[0], views[0])
     if args.find_min_rate:
-        print(f'\nlowest rate that keeps {2 * args.replay_rate:g} frames/s (at most {args.max_lost:.0%} of frames '
-              f'losing an image, p95 latency within {args.latency_margin:g} s of the {rows[0]["rate_mbit"]:g} Mbit/s '
-              'run): ' + (f'{best:g} Mbit/s per link' if best is not None else
-                          f'none: the reference run at {rows[0]["rate_mbit"]:g} Mbit/s did not keep it'))
+        print(
+            f'\nlowest rate that keeps {2 * args.replay_rate:g} frames/s (at most {args.max_lost:.0%} of frames '
+            f'losing an image, p95 latency within {args.latency_margin:g} s of the {rows[0]["rate_mbit"]:g} Mbit/s '
+            'run): '
+            + (
+                f'{best:g} Mbit/s per link'
+                if best is not None
+                else f'none: the reference run at {rows[0]["rate_mbit"]:g} Mbit/s did not keep it'
+            )
+        )
     return 0
 
 

@@ -48,10 +48,12 @@ class Feeder:
         kind = Image if raw else CompressedImage
         topic = '/{}/image_raw' if raw else '/{}/image/compressed'
         self.img_pubs = {v: self.node.create_publisher(kind, topic.format(v), qos) for v in self.views}
-        self.hom_pubs = {v: self.node.create_publisher(HomographyStamped, f'/{v}/homography', publisher_qos()) for v in self.views}
-        self.received = {}   # stamp -> wall time the TrackArray arrived
+        self.hom_pubs = {
+            v: self.node.create_publisher(HomographyStamped, f'/{v}/homography', publisher_qos()) for v in self.views
+        }
+        self.received = {}  # stamp -> wall time the TrackArray arrived
         self.node.create_subscription(TrackArray, '/tracks', self._on_tracks, 100)
-        self.stages = []     # the fuse node's own timing per frame (its /diagnostics)
+        self.stages = []  # the fuse node's own timing per frame (its /diagnostics)
         self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 100)
         # encode once: the bench times the fuse node, not this script
         self.frames = []
@@ -100,28 +102,49 @@ def cpu_seconds(pid: int) -> float:
 
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument('--dataset', default=os.path.join(os.environ.get('MATRIX_SHARED', ROOT.parent / 'shared'),
-                                                     'matrix_sample'))
+    p.add_argument(
+        '--dataset', default=os.path.join(os.environ.get('MATRIX_SHARED', ROOT.parent / 'shared'), 'matrix_sample')
+    )
     p.add_argument('--frames', type=int, default=20, help='frames per phase (default 20)')
     p.add_argument('--rate', type=float, default=2.0, help='paced phase rate, Hz (default 2)')
     p.add_argument('--cpu', type=int, default=0, help='core the fuse node is pinned to (default 0; -1: not pinned)')
     p.add_argument('--raw', action='store_true', help='raw sensor_msgs/Image instead of JPEG CompressedImage')
-    p.add_argument('--scale', type=float, default=1.0, help='resize the 1920x1080 images before sending '
-                   '(0.5: 960x540; shows how much of the latency is DDS transport of large images)')
-    p.add_argument('--dds-profile', default=str(ROOT / 'ros2_ws/src/matrix_bringup/config/fastdds.xml'),
-                   help='Fast DDS profile for both processes (default: matrix_bringup/config/fastdds.xml; '
-                        '"" = the environment\'s / DDS defaults)')
+    p.add_argument(
+        '--scale',
+        type=float,
+        default=1.0,
+        help='resize the 1920x1080 images before sending '
+        '(0.5: 960x540; shows how much of the latency is DDS transport of large images)',
+    )
+    p.add_argument(
+        '--dds-profile',
+        default=str(ROOT / 'ros2_ws/src/matrix_bringup/config/fastdds.xml'),
+        help='Fast DDS profile for both processes (default: matrix_bringup/config/fastdds.xml; '
+        '"" = the environment\'s / DDS defaults)',
+    )
     p.add_argument('--checkpoint', default='', help='BEV checkpoint (default: the shipped one)')
-    p.add_argument('--exe', default=str(ROOT / 'ros2_ws/install/matrix_bev_tracker/lib/matrix_bev_tracker/fuse'),
-                   help='fuse executable (default: this workspace\'s; another checkout\'s for a before/after run, '
-                        'with that checkout\'s scripts/env.sh sourced)')
+    p.add_argument(
+        '--exe',
+        default=str(ROOT / 'ros2_ws/install/matrix_bev_tracker/lib/matrix_bev_tracker/fuse'),
+        help='fuse executable (default: this workspace\'s; another checkout\'s for a before/after run, '
+        'with that checkout\'s scripts/env.sh sourced)',
+    )
     args = p.parse_args()
     dataset = open_dataset(args.dataset)
-    if args.dds_profile:   # before rclpy.init: read when the DDS participants are created
+    if args.dds_profile:  # before rclpy.init: read when the DDS participants are created
         os.environ['FASTRTPS_DEFAULT_PROFILES_FILE'] = args.dds_profile
     cmd = (['taskset', '-c', str(args.cpu)] if args.cpu >= 0 else []) + [
-        args.exe, '--ros-args', '-p', 'threads:=1', '-p', f'image_kind:={"raw" if args.raw else "compressed"}',
-        '-p', 'sync_timeout:=1.0', '-p', f'area:={list(map(float, dataset.area))}']
+        args.exe,
+        '--ros-args',
+        '-p',
+        'threads:=1',
+        '-p',
+        f'image_kind:={"raw" if args.raw else "compressed"}',
+        '-p',
+        'sync_timeout:=1.0',
+        '-p',
+        f'area:={list(map(float, dataset.area))}',
+    ]
     if args.checkpoint:
         cmd += ['-p', f'checkpoint:={args.checkpoint}']
     rclpy.init()
@@ -129,8 +152,12 @@ def main() -> int:
     fuse = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         pubs = [*feeder.img_pubs.values(), *feeder.hom_pubs.values()]
-        if not feeder.spin_until(lambda: fuse.poll() is not None or all(q.get_subscription_count() >= 1
-                                                                          for q in pubs), 120) or fuse.poll():
+        if (
+            not feeder.spin_until(
+                lambda: fuse.poll() is not None or all(q.get_subscription_count() >= 1 for q in pubs), 120
+            )
+            or fuse.poll()
+        ):
             raise RuntimeError('fuse node did not subscribe:\n' + (fuse.communicate()[0] if fuse.poll() else ''))
         # warm-up (first forward passes are slower), then throughput
         for k in range(3):
@@ -155,22 +182,30 @@ def main() -> int:
         feeder.node.destroy_node()
         rclpy.try_shutdown()
     lost = len(stamps) - len(lat)
-    print(f'fuse node alone, pinned to core {args.cpu}, torch threads 1, {len(feeder.views)} views '
-          f'{round(1920 * args.scale)}x{round(1080 * args.scale)} '
-          f'({"raw Image" if args.raw else "JPEG CompressedImage"}), {args.frames} frames per phase, '
-          f'DDS profile: {args.dds_profile or os.environ.get("FASTRTPS_DEFAULT_PROFILES_FILE", "defaults")}')
+    print(
+        f'fuse node alone, pinned to core {args.cpu}, torch threads 1, {len(feeder.views)} views '
+        f'{round(1920 * args.scale)}x{round(1080 * args.scale)} '
+        f'({"raw Image" if args.raw else "JPEG CompressedImage"}), {args.frames} frames per phase, '
+        f'DDS profile: {args.dds_profile or os.environ.get("FASTRTPS_DEFAULT_PROFILES_FILE", "defaults")}'
+    )
     print(f'{"throughput (lockstep)":28s} {throughput:6.2f} frames/s (wall clock)')
-    print(f'{"fuse CPU time per frame":28s} {cpu_per_frame:6.3f} s -> {1 / cpu_per_frame:.2f} frames/s on one free core')
+    print(
+        f'{"fuse CPU time per frame":28s} {cpu_per_frame:6.3f} s -> {1 / cpu_per_frame:.2f} frames/s on one free core'
+    )
     if len(lat):
-        print(f'{"latency at " + str(args.rate) + " Hz":28s} median {np.median(lat):.3f} s, '
-              f'p95 {np.percentile(lat, 95):.3f} s, max {lat.max():.3f} s')
+        print(
+            f'{"latency at " + str(args.rate) + " Hz":28s} median {np.median(lat):.3f} s, '
+            f'p95 {np.percentile(lat, 95):.3f} s, max {lat.max():.3f} s'
+        )
     print(f'{"frames lost at " + str(args.rate) + " Hz":28s} {lost} of {len(stamps)}')
     keys = ('decode_s', 'prepare_s', 'network_s', 'track_s', 'publish_s', 'wait_s')
     stages = [d for d in feeder.stages[3:] if all(k in d for k in keys)]
     if stages:
-        print('fuse node per frame (median s): ' + ', '.join(
-            f'{k[:-2]} {np.median([float(d[k]) for d in stages]):.3f}' for k in keys)
-            + '  (wait: first message of a frame -> published)')
+        print(
+            'fuse node per frame (median s): '
+            + ', '.join(f'{k[:-2]} {np.median([float(d[k]) for d in stages]):.3f}' for k in keys)
+            + '  (wait: first message of a frame -> published)'
+        )
     missing = [line for line in log.splitlines() if 'missing' in line]
     if missing:
         print(f'fuse node fused {len(missing)} frames without some views, e.g.: {missing[0][-160:]}')

@@ -56,16 +56,36 @@ from matrix_ros.qos import qos_by_name
 
 ROOT = Path(__file__).resolve().parent.parent
 RAW_IMAGE = 'sensor_msgs/msg/Image'
-SHOW_FRAMES = 10   # sequences up to this long print every frame's latency
+SHOW_FRAMES = 10  # sequences up to this long print every frame's latency
 
 
 def simulated_sequence(out: Path, frames: int, seed: int = 11, size: tuple = (1920, 1080)) -> tuple:
     """(bag, dataset) of a seeded complex-variant sequence of ``size`` (width, height) pixels with a JPEG bag,
     made once."""
     if not (out / 'bag' / 'metadata.yaml').is_file():
-        subprocess.run(['matrix-tracker', 'simulate', '--config', 'complex', '--frames', str(frames), '--seed', str(seed),
-                        '--width', str(size[0]), '--height', str(size[1]),
-                        '--image_ext', '.jpg', '--bag', '--compressed', '--out', str(out)], check=True)
+        subprocess.run(
+            [
+                'matrix-tracker',
+                'simulate',
+                '--config',
+                'complex',
+                '--frames',
+                str(frames),
+                '--seed',
+                str(seed),
+                '--width',
+                str(size[0]),
+                '--height',
+                str(size[1]),
+                '--image_ext',
+                '.jpg',
+                '--bag',
+                '--compressed',
+                '--out',
+                str(out),
+            ],
+            check=True,
+        )
     return out / 'bag', out
 
 
@@ -84,14 +104,24 @@ class Probe:
     def __init__(self, view: str, compressed: bool):
         self.node = rclpy.create_node('bench_graph_probe')
         self.first_image, self.tracks, self.views_used, self.drone_done, self.raw_topics = {}, {}, {}, {}, set()
-        self.calibrated = {}   # stamp -> arrival of each drone's calib status
-        self.registered = {}   # stamp -> arrival of each drone's register status
+        self.calibrated = {}  # stamp -> arrival of each drone's calib status
+        self.registered = {}  # stamp -> arrival of each drone's register status
         kind, topic = (CompressedImage, f'/{view}/image/compressed') if compressed else (Image, f'/{view}/image_raw')
-        self.node.create_subscription(kind, topic, lambda m: self.first_image.setdefault(
-            stamp_to_seconds(m.header.stamp), time.monotonic()), qos_by_name('reliable', 2))
-        self.node.create_subscription(TrackArray, '/tracks', lambda m: self.tracks.setdefault(
-            stamp_to_seconds(m.header.stamp), time.monotonic()), qos_by_name('history', 100))
-        self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, qos_by_name('history', 100))
+        self.node.create_subscription(
+            kind,
+            topic,
+            lambda m: self.first_image.setdefault(stamp_to_seconds(m.header.stamp), time.monotonic()),
+            qos_by_name('reliable', 2),
+        )
+        self.node.create_subscription(
+            TrackArray,
+            '/tracks',
+            lambda m: self.tracks.setdefault(stamp_to_seconds(m.header.stamp), time.monotonic()),
+            qos_by_name('history', 100),
+        )
+        self.node.create_subscription(
+            DiagnosticArray, '/diagnostics', self._on_diagnostics, qos_by_name('history', 100)
+        )
 
     def _on_diagnostics(self, msg):
         for st in msg.status:
@@ -102,14 +132,18 @@ class Probe:
                 arrivals.setdefault(stamp, []).append(time.monotonic())
             elif st.name == 'fuse':
                 self.views_used[stamp_to_seconds(msg.header.stamp)] = int(
-                    next(kv.value for kv in st.values if kv.key == 'views_used'))
+                    next(kv.value for kv in st.values if kv.key == 'views_used')
+                )
 
     def spin(self, seconds: float) -> None:
         end = time.monotonic() + seconds
         while time.monotonic() < end:
             rclpy.spin_once(self.node, timeout_sec=0.02)
-        self.raw_topics |= {t for t, types in self.node.get_topic_names_and_types()   # published, not only subscribed
-                            if RAW_IMAGE in types and self.node.count_publishers(t)}
+        self.raw_topics |= {
+            t
+            for t, types in self.node.get_topic_names_and_types()  # published, not only subscribed
+            if RAW_IMAGE in types and self.node.count_publishers(t)
+        }
 
 
 def stage_of(label: str) -> str:
@@ -131,15 +165,18 @@ def run_once(settings: GraphSettings, facts: BagFacts, run: Path, drain_s: float
         player, others = graph.procs[specs[-1].label], (specs[-1].label, 'graph_monitor', 'recorder')
         last_news, seen, stages = time.monotonic(), 0, 2 * len(settings.views)
 
-        def news():   # outputs so far: tracks, calib's and register's statuses
+        def news():  # outputs so far: tracks, calib's and register's statuses
             return len(probe.tracks) + sum(probe.drone_done.values())
+
         # until the player is done and every stage finished every frame (or nothing came for drain_s: dropped;
         # without lockstep fuse may fuse a frame before calib and register finished it)
-        while not graph.died(exclude=others) and (player.poll() is None or (
-                news() < len(probe.first_image) * (1 + stages) and time.monotonic() - last_news < drain_s)):
+        while not graph.died(exclude=others) and (
+            player.poll() is None
+            or (news() < len(probe.first_image) * (1 + stages) and time.monotonic() - last_news < drain_s)
+        ):
             probe.spin(0.2)
             if cpu_start is None and probe.first_image:
-                cpu_start = graph.cpu_seconds()   # processing starts; startup (imports, models) excluded
+                cpu_start = graph.cpu_seconds()  # processing starts; startup (imports, models) excluded
             if news() > seen:
                 seen, last_news = news(), time.monotonic()
                 cpu_end = graph.cpu_seconds()
@@ -149,22 +186,36 @@ def run_once(settings: GraphSettings, facts: BagFacts, run: Path, drain_s: float
         probe.node.destroy_node()
     stamps = sorted(probe.first_image)
     lat = np.array([probe.tracks[s] - probe.first_image[s] for s in stamps if s in probe.tracks])
-    figures = {'played': len(stamps), 'dropped': len([s for s in stamps if s not in probe.tracks]),
-               'incomplete': sum(1 for s in stamps if probe.views_used.get(s, len(settings.views)) < len(settings.views)),
-               'crashed': crashed, 'raw_topics': sorted(probe.raw_topics),
-               'timed_out': 'lockstep: only' in graph.log_path(specs[-1]).read_text()}
+    figures = {
+        'played': len(stamps),
+        'dropped': len([s for s in stamps if s not in probe.tracks]),
+        'incomplete': sum(1 for s in stamps if probe.views_used.get(s, len(settings.views)) < len(settings.views)),
+        'crashed': crashed,
+        'raw_topics': sorted(probe.raw_topics),
+        'timed_out': 'lockstep: only' in graph.log_path(specs[-1]).read_text(),
+    }
     if len(lat) and cpu_start and cpu_end:
         figures['rate'] = len(lat) / (max(probe.tracks.values()) - min(probe.first_image.values()))
         figures['latency_median'], figures['latency_p95'] = np.median(lat), np.percentile(lat, 95)
         figures['latencies'] = lat.tolist()
         # the last registration of each frame: what fuse waits for (the rest of the latency is fuse's)
-        figures['registered'] = [max(probe.registered[s]) - probe.first_image[s] if len(
-            probe.registered.get(s, ())) == len(settings.views) else float('nan') for s in stamps if s in probe.tracks]
+        figures['registered'] = [
+            max(probe.registered[s]) - probe.first_image[s]
+            if len(probe.registered.get(s, ())) == len(settings.views)
+            else float('nan')
+            for s in stamps
+            if s in probe.tracks
+        ]
         # calib: nothing in the graph waits for it (it may run behind the tracks: drone_link's own thread)
-        calib = [max(probe.calibrated[s]) - probe.first_image[s] for s in stamps
-                 if len(probe.calibrated.get(s, ())) == len(settings.views)]
+        calib = [
+            max(probe.calibrated[s]) - probe.first_image[s]
+            for s in stamps
+            if len(probe.calibrated.get(s, ())) == len(settings.views)
+        ]
         figures['calib_p95'] = np.percentile(calib, 95) if calib else float('nan')
-        figures['calib_missing'] = len(settings.views) * len(stamps) - sum(len(probe.calibrated.get(s, ())) for s in stamps)
+        figures['calib_missing'] = len(settings.views) * len(stamps) - sum(
+            len(probe.calibrated.get(s, ())) for s in stamps
+        )
         stages = {}
         for label, end in cpu_end.items():
             stages[stage_of(label)] = stages.get(stage_of(label), 0.0) + (end - cpu_start.get(label, 0.0)) / len(lat)
@@ -193,41 +244,62 @@ def decode_costs(bag: Path, repeats: int = 20) -> str:
         for _ in range(repeats):
             work()
         return (time.process_time() - start) / repeats * 1000
+
     separate = ms(lambda: cv2.cvtColor(image_from_msg(msg), cv2.COLOR_BGR2GRAY))
     once = ms(lambda: cv2.resize(gray_image_from_msg(msg), None, fx=0.25, fy=0.25, interpolation=cv2.INTER_AREA))
-    return (f'decode of one {len(msg.data) / 1e3:.0f} kB JPEG (CPU, one thread): separate calib and register '
-            f'2 x {separate:.1f} ms (colour + grey each), drone process {once:.1f} ms (grey once + resize)')
+    return (
+        f'decode of one {len(msg.data) / 1e3:.0f} kB JPEG (CPU, one thread): separate calib and register '
+        f'2 x {separate:.1f} ms (colour + grey each), drone process {once:.1f} ms (grey once + resize)'
+    )
 
 
 def report(name: str, runs: list, views: int) -> int:
     """Print one case's figures (medians over runs); 1 when a run dropped or lost a frame or crashed."""
+
     def med(key):
         values = [r[key] for r in runs if key in r]
         return float(np.median(values)) if values else float('nan')
+
     # A process that exited before the last output (the player in real time, some runs) has no figure in that run.
     names = sorted({k for r in runs for k in r.get('cpu', {})})
     cpu = {k: float(np.median([r['cpu'][k] for r in runs if k in r.get('cpu', {})])) for k in names}
     total = sum(cpu.values())
     print(f'== {name} ({len(runs)} run{"s" if len(runs) > 1 else ""}, medians)')
-    print(f'   frames played {med("played"):.0f}, dropped (no tracks) {med("dropped"):.0f}, fused without every '
-          f'view {med("incomplete"):.0f}; rate {med("rate"):.2f} frames/s; latency first image -> tracks median '
-          f'{med("latency_median"):.2f} s, p95 {med("latency_p95"):.2f} s; first image -> every drone\'s calib '
-          f'status p95 {med("calib_p95"):.2f} s, statuses missing {med("calib_missing"):.0f}')
-    print('   CPU s per frame: ' + ', '.join(f'{k} {v:.2f}' for k, v in sorted(cpu.items(), key=lambda kv: -kv[1]))
-          + f'; all {total:.2f} -> at most {os.cpu_count() / total:.2f} frames/s on {os.cpu_count()} cores'
-          + (f'; per drone {(cpu.get("drone", 0) + cpu.get("calib", 0) + cpu.get("register", 0)) / views:.3f}'
-             if total else ''))
+    print(
+        f'   frames played {med("played"):.0f}, dropped (no tracks) {med("dropped"):.0f}, fused without every '
+        f'view {med("incomplete"):.0f}; rate {med("rate"):.2f} frames/s; latency first image -> tracks median '
+        f'{med("latency_median"):.2f} s, p95 {med("latency_p95"):.2f} s; first image -> every drone\'s calib '
+        f'status p95 {med("calib_p95"):.2f} s, statuses missing {med("calib_missing"):.0f}'
+    )
+    print(
+        '   CPU s per frame: '
+        + ', '.join(f'{k} {v:.2f}' for k, v in sorted(cpu.items(), key=lambda kv: -kv[1]))
+        + f'; all {total:.2f} -> at most {os.cpu_count() / total:.2f} frames/s on {os.cpu_count()} cores'
+        + (
+            f'; per drone {(cpu.get("drone", 0) + cpu.get("calib", 0) + cpu.get("register", 0)) / views:.3f}'
+            if total
+            else ''
+        )
+    )
     short = [r['latencies'] for r in runs if 0 < len(r.get('latencies', ())) <= SHOW_FRAMES]
-    if short:   # a short sequence: where its latency comes from (the first frame costs the most)
+    if short:  # a short sequence: where its latency comes from (the first frame costs the most)
         print('   latency per frame (s), each run: ' + '; '.join(' '.join(f'{x:.2f}' for x in lat) for lat in short))
-        print('   of it, first image -> every drone\'s registration: ' + '; '.join(
-            ' '.join(f'{x:.2f}' for x in r['registered']) for r in runs if 0 < len(r.get('latencies', ())) <= SHOW_FRAMES))
+        print(
+            '   of it, first image -> every drone\'s registration: '
+            + '; '.join(
+                ' '.join(f'{x:.2f}' for x in r['registered'])
+                for r in runs
+                if 0 < len(r.get('latencies', ())) <= SHOW_FRAMES
+            )
+        )
     raw = sorted({t for r in runs for t in r['raw_topics']})
     print(f'   raw images on DDS: {", ".join(raw) if raw else "none"}')
     bad = [r for r in runs if is_bad(r)]
     for r in bad:
-        print(f'   WARNING: crashed {r["crashed"]}, lockstep timed out {r["timed_out"]}, dropped {r["dropped"]}'
-              + (f'; logs: {r["logs"]}/' if 'logs' in r else ''))
+        print(
+            f'   WARNING: crashed {r["crashed"]}, lockstep timed out {r["timed_out"]}, dropped {r["dropped"]}'
+            + (f'; logs: {r["logs"]}/' if 'logs' in r else '')
+        )
     return 1 if bad else 0
 
 
@@ -240,35 +312,65 @@ def main() -> int:
     p.add_argument('--hz', type=float, default=2.0, help='frame rate of the realtime mode')
     p.add_argument('--separate', action='store_true', help='separate calib and register processes (drone_process off)')
     p.add_argument('--drones_per_process', type=int, default=1, help='1 = one process (or two: --separate) per drone')
-    p.add_argument('--drone_niceness', type=int, default=GraphSettings().drone_niceness,
-                   help='niceness of the drone processes (GraphSettings.drone_niceness; 0 = that of fuse)')
-    p.add_argument('--dds_profile', default='', help="Fast DDS profile XML for every process ('' = the environment's, "
-                   "none = Fast DDS's own defaults)")
-    p.add_argument('--register_params', default='', help="register's ROS parameter file (default: matrix_register/"
-                   "config/register.yaml, the live graph's: mode track); e.g. one with mode: reference to compare")
-    p.add_argument('--fuse_params', default='', help="fuse's ROS parameter file (default: matrix_bev_tracker/config/"
-                   "fuse.yaml); e.g. one with threads: 2")
-    p.add_argument('--lockstep_window', type=int, default=GraphSettings().lockstep_window,
-                   help='frames out at once in lockstep (GraphSettings.lockstep_window; 1 = one at a time)')
-    p.add_argument('--lockstep_timeout', type=float, default=300.0,
-                   help='seconds the player waits for a frame to be done before going on (a WARNING line)')
+    p.add_argument(
+        '--drone_niceness',
+        type=int,
+        default=GraphSettings().drone_niceness,
+        help='niceness of the drone processes (GraphSettings.drone_niceness; 0 = that of fuse)',
+    )
+    p.add_argument(
+        '--dds_profile',
+        default='',
+        help="Fast DDS profile XML for every process ('' = the environment's, none = Fast DDS's own defaults)",
+    )
+    p.add_argument(
+        '--register_params',
+        default='',
+        help="register's ROS parameter file (default: matrix_register/"
+        "config/register.yaml, the live graph's: mode track); e.g. one with mode: reference to compare",
+    )
+    p.add_argument(
+        '--fuse_params',
+        default='',
+        help="fuse's ROS parameter file (default: matrix_bev_tracker/config/fuse.yaml); e.g. one with threads: 2",
+    )
+    p.add_argument(
+        '--lockstep_window',
+        type=int,
+        default=GraphSettings().lockstep_window,
+        help='frames out at once in lockstep (GraphSettings.lockstep_window; 1 = one at a time)',
+    )
+    p.add_argument(
+        '--lockstep_timeout',
+        type=float,
+        default=300.0,
+        help='seconds the player waits for a frame to be done before going on (a WARNING line)',
+    )
     p.add_argument('--checkpoint', default='', help='BEV checkpoint (default: the fuse node default)')
     p.add_argument('--sample', default=os.environ.get('MATRIX_SHARED', str(ROOT.parent / 'shared')) + '/matrix_sample')
     p.add_argument('--out', default=str(ROOT / 'out/bench_graph'))
     args = p.parse_args()
     out = Path(args.out)
-    if args.dds_profile == 'none':   # the processes inherit this environment
+    if args.dds_profile == 'none':  # the processes inherit this environment
         os.environ.pop('FASTRTPS_DEFAULT_PROFILES_FILE', None)
         args.dds_profile = ''
     sequences = {}
     if args.sequence in ('real', 'both'):
         sequences['real sample'] = sample_sequence(out / 'sample_bag', Path(args.sample))
     if args.sequence in ('sim', 'both'):
-        sequences[f'simulated complex, {args.frames} frames'] = simulated_sequence(out / f'sim_{args.frames}', args.frames)
+        sequences[f'simulated complex, {args.frames} frames'] = simulated_sequence(
+            out / f'sim_{args.frames}', args.frames
+        )
     modes = ['lockstep', 'realtime'] if args.mode == 'both' else [args.mode]
-    print(f'whole graph on {os.cpu_count()} cores, 8 drones, JPEG bags, '
-          + ('separate calib and register processes' if args.separate else 'one drone process (calib + register) per drone')
-          + f'; DDS profile {args.dds_profile or os.environ.get("FASTRTPS_DEFAULT_PROFILES_FILE", "(Fast DDS defaults)")}')
+    print(
+        f'whole graph on {os.cpu_count()} cores, 8 drones, JPEG bags, '
+        + (
+            'separate calib and register processes'
+            if args.separate
+            else 'one drone process (calib + register) per drone'
+        )
+        + f'; DDS profile {args.dds_profile or os.environ.get("FASTRTPS_DEFAULT_PROFILES_FILE", "(Fast DDS defaults)")}'
+    )
     print(decode_costs(next(iter(sequences.values()))[0]))
     rclpy.init()
     code = 0
@@ -277,19 +379,29 @@ def main() -> int:
             period = read_sequence_clock(str(bag)).frame_period
             for mode in modes:
                 settings = GraphSettings(
-                    bag=str(bag), dataset=str(dataset), drones_per_process=args.drones_per_process,
-                    drone_process=not args.separate, checkpoint=args.checkpoint, monitor=True,
-                    monitor_out=str(out / 'run' / 'monitor'), record=str(out / 'run' / 'recording'),
-                    lockstep=mode == 'lockstep', lockstep_timeout=args.lockstep_timeout, rate=period * args.hz,
+                    bag=str(bag),
+                    dataset=str(dataset),
+                    drones_per_process=args.drones_per_process,
+                    drone_process=not args.separate,
+                    checkpoint=args.checkpoint,
+                    monitor=True,
+                    monitor_out=str(out / 'run' / 'monitor'),
+                    record=str(out / 'run' / 'recording'),
+                    lockstep=mode == 'lockstep',
+                    lockstep_timeout=args.lockstep_timeout,
+                    rate=period * args.hz,
                     lockstep_window=args.lockstep_window,
-                    dds_profile=args.dds_profile, register_params=args.register_params,
-                    fuse_params=args.fuse_params, drone_niceness=args.drone_niceness)
+                    dds_profile=args.dds_profile,
+                    register_params=args.register_params,
+                    fuse_params=args.fuse_params,
+                    drone_niceness=args.drone_niceness,
+                )
                 facts = BagFacts.read(settings.bag, settings.views)
                 label = mode if mode == 'lockstep' else f'realtime {args.hz:g} Hz'
                 runs = []
                 for i in range(args.runs):
                     runs.append(run_once(settings, facts, out / 'run'))
-                    if is_bad(runs[-1]):   # the next run would overwrite the logs that say why
+                    if is_bad(runs[-1]):  # the next run would overwrite the logs that say why
                         kept = out / 'failed' / f'{name}, {label}, run {i + 1}'.replace(' ', '_').replace(',', '')
                         shutil.rmtree(kept, ignore_errors=True)
                         shutil.copytree(out / 'run' / 'logs', kept)

@@ -43,8 +43,15 @@ from matrix_core.register.weights import MissingWeightsError
 from matrix_core.settings import parse_bool
 
 # The flags that set RegisterSettings fields of the same names in every run (mode, matching, tracking).
-MODE_FLAGS = ('mode', 'reanchor_every', 'anchor_by_flow', 'matcher', 'track_min_inliers', 'anchor_search_margin_px',
-              'track_refine_scale')
+MODE_FLAGS = (
+    'mode',
+    'reanchor_every',
+    'anchor_by_flow',
+    'matcher',
+    'track_min_inliers',
+    'anchor_search_margin_px',
+    'track_refine_scale',
+)
 
 
 def feature_budget(backend: str, scale: float, kornia_features: int) -> tuple:
@@ -66,34 +73,64 @@ def mode_settings(args) -> dict:
 def bench(dataset, backend, scale, pairs, kornia_features, **mode) -> dict:
     """One backend at one scale over ``pairs``; ``mode``: RegisterSettings fields (:func:`mode_settings`)."""
     current, reference = feature_budget(backend, scale, kornia_features)
-    settings = RegisterSettings(backend=backend, scale=scale, max_features=current,
-                                reference_max_features=reference, **mode)
+    settings = RegisterSettings(
+        backend=backend, scale=scale, max_features=current, reference_max_features=reference, **mode
+    )
     rows, registrars = [], {}
     for view, frame in tqdm(pairs, desc=f'{backend} @ {scale:g}', unit='pair', leave=False):
         if view not in registrars:
             ref_image = dataset.reference_image(view)
-            registrars[view] = Registrar(settings, ref_image, dataset.reference_camera(view), dataset.area,
-                                         f'{view}/reference')
+            registrars[view] = Registrar(
+                settings, ref_image, dataset.reference_camera(view), dataset.area, f'{view}/reference'
+            )
         image = dataset.load_image(view, frame)
         start = time.process_time()
         r = registrars[view].register(image, frame)
         cpu = time.process_time() - start
-        err = (homography_error_px(r.ref_H_img, dataset.camera(view, frame), dataset.reference_camera(view),
-                                   dataset.area, settings.exclude_boxes) if r.ok else float('nan'))
-        rows.append((r.seconds, r.matches, r.inliers, r.confidence, err, r.ok, cpu, r.message.startswith('tracked'),
-                     r.message.startswith('anchor by flow')))
+        err = (
+            homography_error_px(
+                r.ref_H_img,
+                dataset.camera(view, frame),
+                dataset.reference_camera(view),
+                dataset.area,
+                settings.exclude_boxes,
+            )
+            if r.ok
+            else float('nan')
+        )
+        rows.append(
+            (
+                r.seconds,
+                r.matches,
+                r.inliers,
+                r.confidence,
+                err,
+                r.ok,
+                cpu,
+                r.message.startswith('tracked'),
+                r.message.startswith('anchor by flow'),
+            )
+        )
     a = np.array(rows, dtype=float)
     ok = a[:, 5] > 0
-    return {'backend': backend, 'size': f'{round(1920 * scale)}x{round(1080 * scale)}', 'pairs': len(rows),
-            'features': current,
-            'failed': int((~ok).sum()), 'ms_median': 1000 * float(np.median(a[:, 0])),
-            'ms_max': 1000 * float(np.max(a[:, 0])), 'cpu_ms_median': 1000 * float(np.median(a[:, 6])),
-            'cpu_ms_p95': 1000 * float(np.percentile(a[:, 6], 95)), 'tracked': int(a[:, 7].sum()),
-            'anchors_by_flow': int(a[:, 8].sum()),
-            'matches': float(np.median(a[:, 1])),
-            'inliers': float(np.median(a[:, 2])), 'confidence': float(np.median(a[:, 3])),
-            'err_median_px': float(np.median(a[ok, 4])) if ok.any() else float('nan'),
-            'err_max_px': float(np.max(a[ok, 4])) if ok.any() else float('nan')}
+    return {
+        'backend': backend,
+        'size': f'{round(1920 * scale)}x{round(1080 * scale)}',
+        'pairs': len(rows),
+        'features': current,
+        'failed': int((~ok).sum()),
+        'ms_median': 1000 * float(np.median(a[:, 0])),
+        'ms_max': 1000 * float(np.max(a[:, 0])),
+        'cpu_ms_median': 1000 * float(np.median(a[:, 6])),
+        'cpu_ms_p95': 1000 * float(np.percentile(a[:, 6], 95)),
+        'tracked': int(a[:, 7].sum()),
+        'anchors_by_flow': int(a[:, 8].sum()),
+        'matches': float(np.median(a[:, 1])),
+        'inliers': float(np.median(a[:, 2])),
+        'confidence': float(np.median(a[:, 3])),
+        'err_median_px': float(np.median(a[ok, 4])) if ok.any() else float('nan'),
+        'err_max_px': float(np.max(a[ok, 4])) if ok.any() else float('nan'),
+    }
 
 
 def simulated_acceptance(args) -> int:
@@ -105,18 +142,29 @@ def simulated_acceptance(args) -> int:
     for variant in args.variants:
         folder = Path(args.sim_dir) / f'{variant}_seed{args.sim_seed}_{args.sim_frames}x{args.sim_size[0]}'
         if not (folder / 'matrix_tracker_meta.json').is_file():
-            simulate(SimulateSettings(config=variant, frames=args.sim_frames, seed=args.sim_seed, out=str(folder),
-                                      width=args.sim_size[0], height=args.sim_size[1]))
+            simulate(
+                SimulateSettings(
+                    config=variant,
+                    frames=args.sim_frames,
+                    seed=args.sim_seed,
+                    out=str(folder),
+                    width=args.sim_size[0],
+                    height=args.sim_size[1],
+                )
+            )
         run = acceptance_run(MatrixDataset(folder), RegisterSettings(**mode_settings(args)), progress=True)
         cpu = 1000 * np.array(run['cpu_seconds'])
         ok = run['pairs'] - len(run['failed'])
         met = not run['failed'] and run['error_px_median'] <= 0.5 and run['error_px_max'] <= 3.0
         missed += not met
-        print(f"{variant:9s} {run['width']}px  registered {ok}/{run['pairs']}  "
-              f"time {1000 * run['seconds_median']:4.0f} ms  error median {run['error_px_median']:.2f} px "
-              f"max {run['error_px_max']:.2f} px (full-res-equivalent)  "
-              f"{'meets' if met else 'MISSES'} the criteria; mode {args.mode}: CPU median {np.median(cpu):.0f} ms, "
-              f"p95 {np.percentile(cpu, 95):.0f} ms, by flow {run['tracked']}, anchors by flow {run['anchors_by_flow']}", flush=True)
+        print(
+            f"{variant:9s} {run['width']}px  registered {ok}/{run['pairs']}  "
+            f"time {1000 * run['seconds_median']:4.0f} ms  error median {run['error_px_median']:.2f} px "
+            f"max {run['error_px_max']:.2f} px (full-res-equivalent)  "
+            f"{'meets' if met else 'MISSES'} the criteria; mode {args.mode}: CPU median {np.median(cpu):.0f} ms, "
+            f"p95 {np.percentile(cpu, 95):.0f} ms, by flow {run['tracked']}, anchors by flow {run['anchors_by_flow']}",
+            flush=True,
+        )
         for pair, reason in run['failed'].items():
             print(f'  failed {pair}: {reason}')
     return int(missed > 0)
@@ -128,8 +176,9 @@ def main(argv=None) -> int:
     default_sample = Path(os.environ.get('MATRIX_SHARED', root.parent / 'shared')) / 'matrix_sample'
     parser.add_argument('--dataset', default=str(default_sample), help='MATRIX folder with reference/')
     parser.add_argument('--backends', nargs='*', default=sorted(BACKENDS), help='backends to run')
-    parser.add_argument('--scales', nargs='*', type=float, default=[1.0, 0.5, 0.25],
-                        help='image scales (1.0 = 1920x1080)')
+    parser.add_argument(
+        '--scales', nargs='*', type=float, default=[1.0, 0.5, 0.25], help='image scales (1.0 = 1920x1080)'
+    )
     parser.add_argument('--kornia-pairs', type=int, default=2, help='pairs per kornia backend and scale')
     parser.add_argument('--kornia-features', type=int, default=8000, help='features of the kornia detectors')
     parser.add_argument('--json', help='also write the table to this JSON file')
@@ -139,29 +188,57 @@ def main(argv=None) -> int:
     parser.add_argument('--sim-frames', type=int, default=50)
     parser.add_argument('--sim-seed', type=int, default=3)
     parser.add_argument('--sim-size', type=int, nargs=2, default=[1920, 1080], metavar=('W', 'H'))
-    parser.add_argument('--mode', choices=['reference', 'track'], default=RegisterSettings().mode,
-                        help='registration mode (RegisterSettings.mode)')
-    parser.add_argument('--reanchor_every', type=int, default=RegisterSettings().reanchor_every,
-                        help='mode track: full registration every this many frames')
-    parser.add_argument('--anchor_by_flow', type=parse_bool,
-                        default=RegisterSettings().anchor_by_flow,
-                        help='mode track: anchors tried by flow to the reference first (true/false)')
-    parser.add_argument('--matcher', choices=['flann', 'brute'], default=RegisterSettings().matcher,
-                        help='nearest-neighbour search of the feature matching (RegisterSettings.matcher)')
-    parser.add_argument('--track_min_inliers', type=int, default=RegisterSettings().track_min_inliers,
-                        help='mode track: fewer refined inliers doubt the chain (RegisterSettings.track_min_inliers)')
-    parser.add_argument('--anchor_search_margin_px', type=float, default=RegisterSettings().anchor_search_margin_px,
-                        help="mode track: a doubted chain's anchor searches the predicted ground grown by this "
-                        'many pixels, 0 = the whole image (RegisterSettings.anchor_search_margin_px)')
-    parser.add_argument('--track_refine_scale', type=float, default=RegisterSettings().track_refine_scale,
-                        help='mode track: scale of the refinement against the anchor, 0.25 = the flow\'s own '
-                        '(RegisterSettings.track_refine_scale)')
+    parser.add_argument(
+        '--mode',
+        choices=['reference', 'track'],
+        default=RegisterSettings().mode,
+        help='registration mode (RegisterSettings.mode)',
+    )
+    parser.add_argument(
+        '--reanchor_every',
+        type=int,
+        default=RegisterSettings().reanchor_every,
+        help='mode track: full registration every this many frames',
+    )
+    parser.add_argument(
+        '--anchor_by_flow',
+        type=parse_bool,
+        default=RegisterSettings().anchor_by_flow,
+        help='mode track: anchors tried by flow to the reference first (true/false)',
+    )
+    parser.add_argument(
+        '--matcher',
+        choices=['flann', 'brute'],
+        default=RegisterSettings().matcher,
+        help='nearest-neighbour search of the feature matching (RegisterSettings.matcher)',
+    )
+    parser.add_argument(
+        '--track_min_inliers',
+        type=int,
+        default=RegisterSettings().track_min_inliers,
+        help='mode track: fewer refined inliers doubt the chain (RegisterSettings.track_min_inliers)',
+    )
+    parser.add_argument(
+        '--anchor_search_margin_px',
+        type=float,
+        default=RegisterSettings().anchor_search_margin_px,
+        help="mode track: a doubted chain's anchor searches the predicted ground grown by this "
+        'many pixels, 0 = the whole image (RegisterSettings.anchor_search_margin_px)',
+    )
+    parser.add_argument(
+        '--track_refine_scale',
+        type=float,
+        default=RegisterSettings().track_refine_scale,
+        help='mode track: scale of the refinement against the anchor, 0.25 = the flow\'s own '
+        '(RegisterSettings.track_refine_scale)',
+    )
     args = parser.parse_args(argv)
 
     cv2.setNumThreads(1)
-    threadpool_limits(1, user_api='blas')   # as the nodes (NodeSettings.apply_threads)
+    threadpool_limits(1, user_api='blas')  # as the nodes (NodeSettings.apply_threads)
     try:
         import torch
+
         torch.set_num_threads(1)
     except ImportError:
         pass
@@ -182,11 +259,14 @@ def main(argv=None) -> int:
                 print(f'{backend}: skipped: {exc}', file=sys.stderr)
                 break
             row = table[-1]
-            print(f"{row['backend']:22s} {row['size']:>9s} feat {row['features']:5d} pairs {row['pairs']:2d} failed {row['failed']:2d}  "
-                  f"time {row['ms_median']:7.0f} ms (max {row['ms_max']:6.0f})  matches {row['matches']:5.0f}  "
-                  f"inliers {row['inliers']:5.0f}  c {row['confidence']:.2f}  error median {row['err_median_px']:.2f} px "
-                  f"max {row['err_max_px']:.2f} px  CPU median {row['cpu_ms_median']:.0f} ms p95 {row['cpu_ms_p95']:.0f} "
-                  f"by flow {row['tracked']}, anchors by flow {row['anchors_by_flow']}", flush=True)
+            print(
+                f"{row['backend']:22s} {row['size']:>9s} feat {row['features']:5d} pairs {row['pairs']:2d} failed {row['failed']:2d}  "
+                f"time {row['ms_median']:7.0f} ms (max {row['ms_max']:6.0f})  matches {row['matches']:5.0f}  "
+                f"inliers {row['inliers']:5.0f}  c {row['confidence']:.2f}  error median {row['err_median_px']:.2f} px "
+                f"max {row['err_max_px']:.2f} px  CPU median {row['cpu_ms_median']:.0f} ms p95 {row['cpu_ms_p95']:.0f} "
+                f"by flow {row['tracked']}, anchors by flow {row['anchors_by_flow']}",
+                flush=True,
+            )
     if args.json:
         Path(args.json).write_text(json.dumps(table, indent=1))
     return 0

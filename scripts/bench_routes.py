@@ -54,11 +54,13 @@ def routes(module, args, tmp: Path, name: str) -> dict:
     """route name -> a callable on numpy or torch inputs returning a list of arrays."""
     out = {'eager': lambda *a: module(*a)}
     cl = copy.deepcopy(module).to(memory_format=torch.channels_last)
-    out['channels_last'] = lambda *a: cl(*(x.contiguous(memory_format=torch.channels_last) if x.dim() == 4 else x
-                                           for x in a))
+    out['channels_last'] = lambda *a: cl(
+        *(x.contiguous(memory_format=torch.channels_last) if x.dim() == 4 else x for x in a)
+    )
     out['torchscript'] = torch.jit.optimize_for_inference(torch.jit.freeze(torch.jit.trace(module, args)))
     if importlib.util.find_spec('onnxruntime') and importlib.util.find_spec('onnx'):
         import onnxruntime as ort
+
         path = tmp / f'{name}.onnx'
         torch.onnx.export(module, args, str(path), dynamo=False, opset_version=17)
         so = ort.SessionOptions()
@@ -68,8 +70,12 @@ def routes(module, args, tmp: Path, name: str) -> dict:
         out['onnxruntime'] = lambda *a: session.run(None, {n: x.numpy() for n, x in zip(names, a)})
     if importlib.util.find_spec('openvino'):
         import openvino as ov
-        compiled = ov.Core().compile_model(ov.convert_model(module, example_input=args), 'CPU', {
-            'INFERENCE_NUM_THREADS': 1, 'PERFORMANCE_HINT': 'LATENCY', 'INFERENCE_PRECISION_HINT': 'f32'})
+
+        compiled = ov.Core().compile_model(
+            ov.convert_model(module, example_input=args),
+            'CPU',
+            {'INFERENCE_NUM_THREADS': 1, 'PERFORMANCE_HINT': 'LATENCY', 'INFERENCE_PRECISION_HINT': 'f32'},
+        )
         request = compiled.create_infer_request()
         out['openvino'] = lambda *a: list(request.infer([x.numpy() for x in a]).values())
     return out
@@ -86,13 +92,19 @@ def main() -> int:
     args = p.parse_args()
     torch.set_num_threads(1)
     model, settings = load_model(shipped_checkpoint())
-    rows, cols = settings.grid([-15.0, -15.0, 15.0, 15.0]).shape     # the MATRIX area: 30 m square
+    rows, cols = settings.grid([-15.0, -15.0, 15.0, 15.0]).shape  # the MATRIX area: 30 m square
     g = torch.Generator().manual_seed(0)
-    parts = {'encoder': (model.encoder, (torch.randn(8, 3, settings.image_height, settings.image_width, generator=g),)),
-             'bev part': (BevPart(model).eval(), (torch.rand(1, 65, rows, cols, generator=g),
-                                                  torch.rand(1, 64, rows, cols, generator=g), torch.ones(1)))}
-    print(f'one thread, CPU time per call (median of {args.calls}); encoder: 8 views {settings.image_width}x'
-          f'{settings.image_height}; bev part: grid {cols}x{rows}')
+    parts = {
+        'encoder': (model.encoder, (torch.randn(8, 3, settings.image_height, settings.image_width, generator=g),)),
+        'bev part': (
+            BevPart(model).eval(),
+            (torch.rand(1, 65, rows, cols, generator=g), torch.rand(1, 64, rows, cols, generator=g), torch.ones(1)),
+        ),
+    }
+    print(
+        f'one thread, CPU time per call (median of {args.calls}); encoder: 8 views {settings.image_width}x'
+        f'{settings.image_height}; bev part: grid {cols}x{rows}'
+    )
     with tempfile.TemporaryDirectory() as tmp, torch.no_grad():
         for name, (module, inputs) in parts.items():
             reference = as_list(module(*inputs))

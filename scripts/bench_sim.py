@@ -43,8 +43,10 @@ def main():
     config = load_scene_config(args.config)
     for width, height in ((640, 360), (1920, 1080)):
         setup, fps, vps = bench(config, width, height, args.frames)
-        print(f'sim {args.config} {width}x{height}: {fps:.1f} frames/s ({vps:.0f} views/s, 8 views/frame, '
-              f'1 thread); scene setup {setup:.2f} s')
+        print(
+            f'sim {args.config} {width}x{height}: {fps:.1f} frames/s ({vps:.0f} views/s, 8 views/frame, '
+            f'1 thread); scene setup {setup:.2f} s'
+        )
 
 
 if __name__ == '__main__':

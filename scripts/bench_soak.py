@@ -61,22 +61,28 @@ def report(probe: Probe, samples: list, frames: int, out: Path) -> tuple:
     stamps = sorted(probe.first_image)
     lost = [s for s in stamps if s not in probe.tracks]
     lat = np.array([probe.tracks[s] - probe.first_image[s] for s in stamps if s in probe.tracks])
-    print(f'\nframes played / with tracks / in the bag: {len(stamps)} / {len(stamps) - len(lost)} / {frames}'
-          + (f'  (lost: {lost[:10]}{" ..." if len(lost) > 10 else ""})' if lost else '  (no frame lost)'))
+    print(
+        f'\nframes played / with tracks / in the bag: {len(stamps)} / {len(stamps) - len(lost)} / {frames}'
+        + (f'  (lost: {lost[:10]}{" ..." if len(lost) > 10 else ""})' if lost else '  (no frame lost)')
+    )
     if len(lat):
         span = max(probe.tracks.values()) - min(probe.first_image.values())
         print(f'sustained rate (lockstep): {len(lat) / span:.2f} frames/s')
         tenth = max(1, len(lat) // 10)
         first, last = lat[:tenth], lat[-tenth:]
-        print(f'latency first image -> tracks: first {tenth} frames median {np.median(first):.2f} s '
-              f'(p95 {np.percentile(first, 95):.2f}), last {tenth} frames median {np.median(last):.2f} s '
-              f'(p95 {np.percentile(last, 95):.2f}), all median {np.median(lat):.2f} s')
-    started = [s for s in samples if s[0] >= 1]   # from the first frame with tracks: startup excluded
+        print(
+            f'latency first image -> tracks: first {tenth} frames median {np.median(first):.2f} s '
+            f'(p95 {np.percentile(first, 95):.2f}), last {tenth} frames median {np.median(last):.2f} s '
+            f'(p95 {np.percentile(last, 95):.2f}), all median {np.median(lat):.2f} s'
+        )
+    started = [s for s in samples if s[0] >= 1]  # from the first frame with tracks: startup excluded
     if started:
         start = started[0]
-        end = [s for s in started if set(s[2]) >= set(start[2])][-1]   # the last with every process running
-        print(f'\n{"process":24s} {"RSS start MiB":>14s} {"RSS end MiB":>12s} {"change":>8s}   '
-              f'(start = frame {start[0]}, end = frame {end[0]})')
+        end = [s for s in started if set(s[2]) >= set(start[2])][-1]  # the last with every process running
+        print(
+            f'\n{"process":24s} {"RSS start MiB":>14s} {"RSS end MiB":>12s} {"change":>8s}   '
+            f'(start = frame {start[0]}, end = frame {end[0]})'
+        )
         for label in start[2]:
             a, b = start[2][label], end[2].get(label, float('nan'))
             print(f'{label:24s} {a:14.0f} {b:12.0f} {b - a:+8.0f}')
@@ -88,8 +94,10 @@ def report(probe: Probe, samples: list, frames: int, out: Path) -> tuple:
 
 def plot(lat: np.ndarray, samples: list, path: Path) -> None:
     import matplotlib
+
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
+
     fig, (ax_rss, ax_lat) = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
     if samples:
         x = [s[0] for s in samples]
@@ -118,23 +126,36 @@ def main() -> int:
     p.add_argument('--out', default=str(ROOT / 'out/bench_soak'))
     args = p.parse_args()
     out = Path(args.out)
-    bag, dataset = simulated_sequence(out / f'sim_{args.frames}_{args.seed}_{args.width}x{args.height}',
-                                      args.frames, args.seed, (args.width, args.height))
+    bag, dataset = simulated_sequence(
+        out / f'sim_{args.frames}_{args.seed}_{args.width}x{args.height}',
+        args.frames,
+        args.seed,
+        (args.width, args.height),
+    )
     run = out / 'run'
     shutil.rmtree(run, ignore_errors=True)
-    settings = GraphSettings(bag=str(bag), dataset=str(dataset), drones_per_process=args.drones_per_process,
-                             checkpoint='', monitor=True, monitor_out=str(run / 'monitor'),  # '': the default
-                             record=str(run / 'recording'), lockstep_timeout=300.0)
+    settings = GraphSettings(
+        bag=str(bag),
+        dataset=str(dataset),
+        drones_per_process=args.drones_per_process,
+        checkpoint='',
+        monitor=True,
+        monitor_out=str(run / 'monitor'),  # '': the default
+        record=str(run / 'recording'),
+        lockstep_timeout=300.0,
+    )
     facts = BagFacts.read(settings.bag, settings.views)
     specs = graph_nodes(settings, facts)
     player_label = specs[-1].label
     graph = Graph(run / 'logs', settings.dds_profile)
     rclpy.init()
     probe = Probe(settings.views[0], facts.compressed)
-    samples = []   # (frames with tracks, wall s, {label: RSS MiB})
+    samples = []  # (frames with tracks, wall s, {label: RSS MiB})
     t0 = time.monotonic()
-    print(f'soak: {facts.frames} frames x {len(settings.views)} drones ({args.width}x{args.height}), {len(specs)} processes, logs {run / "logs"}',
-          flush=True)
+    print(
+        f'soak: {facts.frames} frames x {len(settings.views)} drones ({args.width}x{args.height}), {len(specs)} processes, logs {run / "logs"}',
+        flush=True,
+    )
     try:
         for spec in specs:
             graph.start(spec)
@@ -147,10 +168,14 @@ def main() -> int:
                 next_sample = now + args.sample_s
             if now >= next_print:
                 done, rss = samples[-1][0], sum(samples[-1][2].values())
-                last = [probe.tracks[s] - probe.first_image[s] for s in sorted(probe.tracks)[-5:]
-                        if s in probe.first_image]
-                print(f'[{now:7.0f} s] frame {done}/{facts.frames}, RSS all {rss:.0f} MiB'
-                      + (f', latency {np.median(last):.2f} s' if last else ''), flush=True)
+                last = [
+                    probe.tracks[s] - probe.first_image[s] for s in sorted(probe.tracks)[-5:] if s in probe.first_image
+                ]
+                print(
+                    f'[{now:7.0f} s] frame {done}/{facts.frames}, RSS all {rss:.0f} MiB'
+                    + (f', latency {np.median(last):.2f} s' if last else ''),
+                    flush=True,
+                )
                 next_print = now + 30.0
         probe.spin(2.0)
         samples.append((frame_at(probe), time.monotonic() - t0, sample_rss(graph)))

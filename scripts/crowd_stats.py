@@ -31,8 +31,11 @@ def crowd_statistics(track: np.ndarray) -> dict:
     moving = (la > 0.2) & (lb > 0.2)
     cosine = (a * b).sum(axis=2)[moving] / (la[moving] * lb[moving])
     gaps = np.linalg.norm(track[:, :, None] - track[:, None], axis=3) + np.eye(track.shape[1]) * 1e6
-    return {'step': np.percentile(length, [50, 95]), 'turn': np.percentile(np.degrees(np.arccos(np.clip(cosine, -1, 1))), [50, 90, 99]),
-            'nearest': np.percentile(gaps.min(axis=2), [1, 5, 25, 50])}
+    return {
+        'step': np.percentile(length, [50, 95]),
+        'turn': np.percentile(np.degrees(np.arccos(np.clip(cosine, -1, 1))), [50, 90, 99]),
+        'nearest': np.percentile(gaps.min(axis=2), [1, 5, 25, 50]),
+    }
 
 
 def real_track(root: Path) -> np.ndarray:
@@ -63,8 +66,13 @@ def main(argv=None) -> int:
     print('| crowd | step p50 / p95 (m) | turn p50 / p90 / p99 (deg) | nearest p1 / p5 / p25 / p50 (m) |')
     print('|---|---|---|---|')
     for name, st in rows:
-        print(f'| {name} | ' + ' | '.join(' / '.join(f'{v:.{0 if k == "turn" else 2}f}' for v in st[k])
-                                          for k in ('step', 'turn', 'nearest')) + ' |')
+        print(
+            f'| {name} | '
+            + ' | '.join(
+                ' / '.join(f'{v:.{0 if k == "turn" else 2}f}' for v in st[k]) for k in ('step', 'turn', 'nearest')
+            )
+            + ' |'
+        )
     return 0
 
 

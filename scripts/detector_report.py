@@ -45,10 +45,12 @@ COLUMNS = ('MODA', 'MODP', 'prec', 'rec', 'MOTA', 'MOTP', 'IDF1', 'MT %', 'ML %'
 def rows(real_registration: Path) -> list:
     """(name, folder, calibration source, calibration dir) of every evaluated row."""
     sample = SHARED / 'matrix_sample'
-    return [('sim complex test s201', Path('data/det_complex_test_s201'), 'ground_truth', None),
-            ('sim modified test s202', Path('data/det_modified_test_s202'), 'ground_truth', None),
-            ('real 0-4, true calib (val)', sample, 'ground_truth', None),
-            ('real 0-4, registration (val)', sample, 'registration', real_registration)]
+    return [
+        ('sim complex test s201', Path('data/det_complex_test_s201'), 'ground_truth', None),
+        ('sim modified test s202', Path('data/det_modified_test_s202'), 'ground_truth', None),
+        ('real 0-4, true calib (val)', sample, 'ground_truth', None),
+        ('real 0-4, registration (val)', sample, 'registration', real_registration),
+    ]
 
 
 def corner_false_positives(result, area) -> int:
@@ -67,10 +69,19 @@ def corner_false_positives(result, area) -> int:
 def figures(result, area) -> dict:
     d, t = result.detection, result.tracking
     ids = max(t.num_gt_ids, 1)
-    return {'MODA': 100 * d.moda, 'MODP': 100 * d.modp, 'prec': 100 * d.precision, 'rec': 100 * d.recall,
-            'MOTA': 100 * t.mota, 'MOTP': t.motp_percent, 'IDF1': 100 * t.idf1,
-            'MT %': 100 * t.mostly_tracked / ids, 'ML %': 100 * t.mostly_lost / ids, 'IDsw': t.id_switches,
-            'corner fp': corner_false_positives(result, area)}
+    return {
+        'MODA': 100 * d.moda,
+        'MODP': 100 * d.modp,
+        'prec': 100 * d.precision,
+        'rec': 100 * d.recall,
+        'MOTA': 100 * t.mota,
+        'MOTP': t.motp_percent,
+        'IDF1': 100 * t.idf1,
+        'MT %': 100 * t.mostly_tracked / ids,
+        'ML %': 100 * t.mostly_lost / ids,
+        'IDsw': t.id_switches,
+        'corner fp': corner_false_positives(result, area),
+    }
 
 
 def ensure_registration(out: Path) -> Path:
@@ -90,8 +101,14 @@ def heatmap_png(path: Path, panels: list, grid) -> None:
 
     fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), 5.2), dpi=100, squeeze=False)
     for ax, (title, output, gt) in zip(axes[0], panels):
-        ax.imshow(output.heatmap, origin='lower', extent=(grid.x_min, grid.x_max, grid.y_min, grid.y_max),
-                  cmap='magma', vmin=0, vmax=1)
+        ax.imshow(
+            output.heatmap,
+            origin='lower',
+            extent=(grid.x_min, grid.x_max, grid.y_min, grid.y_max),
+            cmap='magma',
+            vmin=0,
+            vmax=1,
+        )
         ax.scatter(gt[:, 0], gt[:, 1], s=40, facecolors='none', edgecolors='lime', label='ground truth')
         det = output.detections.xy
         ax.scatter(det[:, 0], det[:, 1], s=25, marker='x', c='red', label='detections')
@@ -121,11 +138,14 @@ def validation_png(path: Path, checkpoints: list) -> bool:
         records = [h for h in json.loads(history_path.read_text()) if 'val_score' in h]
         history = [h for h in records if 'averaged' not in h]
         averaged = [h for h in records if 'averaged' in h]
-        labels = sorted({k[len('val_moda['):-1] for h in history for k in h if k.startswith('val_moda[')})
+        labels = sorted({k[len('val_moda[') : -1] for h in history for k in h if k.startswith('val_moda[')})
         if history and labels:
             shipped = load_checkpoint(ckpt)
-            chosen = (f'average of epochs {shipped["averaged"][0]}-{shipped["averaged"][-1]}'
-                      if 'averaged' in shipped else f'epoch {shipped.get("epoch")}')
+            chosen = (
+                f'average of epochs {shipped["averaged"][0]}-{shipped["averaged"][-1]}'
+                if 'averaged' in shipped
+                else f'epoch {shipped.get("epoch")}'
+            )
             panels.append((ckpt.stem, history, labels, averaged[-1] if averaged else None, chosen))
     if not panels:
         return False
@@ -134,14 +154,24 @@ def validation_png(path: Path, checkpoints: list) -> bool:
         epochs = [h['epoch'] for h in history]
         for k, label in enumerate(labels):
             colour = f'C{k}'
-            ax.plot(epochs, [100 * h.get(f'val_moda[{label}]', np.nan) for h in history], marker='o', color=colour,
-                    label=label)
-            if averaged is not None:     # the weight average, drawn half an epoch after the last
+            ax.plot(
+                epochs,
+                [100 * h.get(f'val_moda[{label}]', np.nan) for h in history],
+                marker='o',
+                color=colour,
+                label=label,
+            )
+            if averaged is not None:  # the weight average, drawn half an epoch after the last
                 ax.plot(epochs[-1] + 0.5, 100 * averaged.get(f'val_moda[{label}]', np.nan), '*', ms=12, color=colour)
         ax.plot(epochs, [100 * h['val_score'] for h in history], 'k-', lw=2, label='val_score (selects)')
         if averaged is not None:
-            ax.plot(epochs[-1] + 0.5, 100 * averaged['val_score'], 'k*', ms=14, label='average of epochs '
-                    f'{averaged["averaged"][0]}-{averaged["averaged"][-1]} (*)')
+            ax.plot(
+                epochs[-1] + 0.5,
+                100 * averaged['val_score'],
+                'k*',
+                ms=14,
+                label=f'average of epochs {averaged["averaged"][0]}-{averaged["averaged"][-1]} (*)',
+            )
         ax.set_title(f'{name}: exported {chosen}', fontsize=9)
         ax.set_xlabel('epoch')
         ax.grid(alpha=0.3)
@@ -155,8 +185,7 @@ def validation_png(path: Path, checkpoints: list) -> bool:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument('--checkpoints', nargs='*', type=Path,
-                   default=sorted(CHECKPOINTS.glob('detector_seed*.pt')))
+    p.add_argument('--checkpoints', nargs='*', type=Path, default=sorted(CHECKPOINTS.glob('detector_seed*.pt')))
     p.add_argument('--out', type=Path, default=Path('out/detector_report'))
     p.add_argument('--frame', type=int, default=2, help='real frame drawn in heatmaps.png')
     args = p.parse_args(argv)
@@ -174,23 +203,30 @@ def main(argv=None) -> int:
             data = BevFrames(folder, settings, calibration=source, cache_images=False, calibration_dir=cdir)
             result = evaluate(model, data, progress=False)
             table[(ckpt.stem, name)] = figures(result, data.dataset.area)
-            print(f'{ckpt.stem:18s} {name:30s} ' + ' '.join(f'{k} {v:.1f}' for k, v in table[(ckpt.stem, name)].items()),
-                  flush=True)
+            print(
+                f'{ckpt.stem:18s} {name:30s} ' + ' '.join(f'{k} {v:.1f}' for k, v in table[(ckpt.stem, name)].items()),
+                flush=True,
+            )
             if source == 'ground_truth' and folder == SHARED / 'matrix_sample':
                 output = next(o for o in result.outputs if o.frame == args.frame)
-                panels.append((f'{ckpt.stem}: real frame {args.frame}', output,
-                               result.gt.xy[result.gt.frames == args.frame]))
+                panels.append(
+                    (f'{ckpt.stem}: real frame {args.frame}', output, result.gt.xy[result.gt.frames == args.frame])
+                )
                 grid = data.grid
     head = '| checkpoint | data | ' + ' | '.join(COLUMNS) + ' |'
     lines = [head, '|' + '---|' * (len(COLUMNS) + 2)]
     for (ckpt, name), f in table.items():
-        lines.append(f'| {ckpt} | {name} | ' + ' | '.join(f'{f[c]:.1f}' if isinstance(f[c], float) else str(f[c])
-                                                           for c in COLUMNS) + ' |')
+        lines.append(
+            f'| {ckpt} | {name} | '
+            + ' | '.join(f'{f[c]:.1f}' if isinstance(f[c], float) else str(f[c]) for c in COLUMNS)
+            + ' |'
+        )
     text = '\n'.join(lines)
     print(text)
     (args.out / 'report.md').write_text(text + '\n')
-    (args.out / 'report.json').write_text(json.dumps([{'checkpoint': c, 'data': n, **f} for (c, n), f in table.items()],
-                                                     indent=1))
+    (args.out / 'report.json').write_text(
+        json.dumps([{'checkpoint': c, 'data': n, **f} for (c, n), f in table.items()], indent=1)
+    )
     if panels:
         heatmap_png(args.out / 'heatmaps.png', panels, grid)
     curves = validation_png(args.out / 'validation.png', args.checkpoints)

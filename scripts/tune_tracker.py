@@ -36,16 +36,25 @@ from matrix_core.fusion.settings import shipped_checkpoint  # noqa: E402
 from matrix_core.tracking import TrackerSettings  # noqa: E402
 
 SHARED = Path(os.environ.get('MATRIX_SHARED', Path(__file__).resolve().parents[1].parent / 'shared'))
-SEQUENCES = {'complex val s111': Path('data/det_complex_val_s111'),
-             'modified val s112': Path('data/det_modified_val_s112'),
-             'complex trackval s113': Path('data/det_complex_trackval_s113'),
-             'modified trackval s114': Path('data/det_modified_trackval_s114'),
-             'real 0-4 (val)': SHARED / 'matrix_sample'}
-CANDIDATES = {'gate_m': [0.75, 1.0, 1.5, 2.0], 'gate_growth_m': [0.5, 1.0, 1.5],
-              'high_score': [0.4, 0.5, 0.6], 'low_score': [0.1, 0.2, 0.3], 'birth_hits': [1, 2, 3],
-              'max_misses': [2, 3, 5, 8], 'accel_noise': [1.0, 2.0, 4.0],
-              'measurement_noise_m': [0.15, 0.3, 0.5], 'report_coasting': [0, 1, 2],
-              'use_offsets': [True, False]}
+SEQUENCES = {
+    'complex val s111': Path('data/det_complex_val_s111'),
+    'modified val s112': Path('data/det_modified_val_s112'),
+    'complex trackval s113': Path('data/det_complex_trackval_s113'),
+    'modified trackval s114': Path('data/det_modified_trackval_s114'),
+    'real 0-4 (val)': SHARED / 'matrix_sample',
+}
+CANDIDATES = {
+    'gate_m': [0.75, 1.0, 1.5, 2.0],
+    'gate_growth_m': [0.5, 1.0, 1.5],
+    'high_score': [0.4, 0.5, 0.6],
+    'low_score': [0.1, 0.2, 0.3],
+    'birth_hits': [1, 2, 3],
+    'max_misses': [2, 3, 5, 8],
+    'accel_noise': [1.0, 2.0, 4.0],
+    'measurement_noise_m': [0.15, 0.3, 0.5],
+    'report_coasting': [0, 1, 2],
+    'use_offsets': [True, False],
+}
 
 
 def parse_setting(text: str) -> tuple:
@@ -63,8 +72,13 @@ def scores(runs: dict, settings: TrackerSettings) -> dict:
     for name, (frames, outputs, gt) in runs.items():
         r = track_and_score(frames, outputs, gt, settings)
         t = r.tracking
-        out[name] = {'IDF1': 100 * t.idf1, 'MOTA': 100 * t.mota, 'MT %': 100 * t.mostly_tracked / max(t.num_gt_ids, 1),
-                     'IDsw': t.id_switches, 'MODA': 100 * r.detection.moda}
+        out[name] = {
+            'IDF1': 100 * t.idf1,
+            'MOTA': 100 * t.mota,
+            'MT %': 100 * t.mostly_tracked / max(t.num_gt_ids, 1),
+            'IDsw': t.id_switches,
+            'MODA': 100 * r.detection.moda,
+        }
     return out
 
 
@@ -74,8 +88,10 @@ def objective(per_sequence: dict) -> float:
 
 def plot(trials: list, path: Path) -> None:
     import matplotlib
+
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
+
     names = list(CANDIDATES)
     fig, axes = plt.subplots(2, (len(names) + 1) // 2, figsize=(3 * ((len(names) + 1) // 2), 6), squeeze=False)
     for ax, name in zip(axes.flat, names):
@@ -97,11 +113,20 @@ def main(argv=None) -> int:
     p.add_argument('--checkpoint', type=Path, default=shipped_checkpoint())
     p.add_argument('--out', type=Path, default=Path('out/tune_tracker'))
     p.add_argument('--rounds', type=int, default=2)
-    p.add_argument('--set', nargs='*', default=[], metavar='NAME=VALUE',
-                   help='start the search from the defaults with these changed')
-    p.add_argument('--min_gain', type=float, default=0.25,
-                   help='a change is kept only if it raises the objective by at least this (points): smaller '
-                        'gains are within the noise of a few hundred validation frames')
+    p.add_argument(
+        '--set',
+        nargs='*',
+        default=[],
+        metavar='NAME=VALUE',
+        help='start the search from the defaults with these changed',
+    )
+    p.add_argument(
+        '--min_gain',
+        type=float,
+        default=0.25,
+        help='a change is kept only if it raises the objective by at least this (points): smaller '
+        'gains are within the noise of a few hundred validation frames',
+    )
     p.add_argument('--keep', nargs='*', default=[], metavar='NAME', help='parameters not searched')
     args = p.parse_args(argv)
     torch.set_num_threads(1)
@@ -137,17 +162,32 @@ def main(argv=None) -> int:
     tuned = scores(runs, best)
     changed = {k: v for k, v in asdict(best).items() if v != getattr(start, k)}
     print(f'\nbest settings (changed from the start): {changed or "none"}; objective {best_value:.2f}')
-    print('| sequence | IDF1 start | IDF1 best | MOTA start | MOTA best | MT % start | MT % best | '
-          'IDsw start | IDsw best |')
+    print(
+        '| sequence | IDF1 start | IDF1 best | MOTA start | MOTA best | MT % start | MT % best | '
+        'IDsw start | IDsw best |'
+    )
     print('|---|---|---|---|---|---|---|---|---|')
     for name in runs:
         a, b = defaults[name], tuned[name]
-        print(f'| {name} | {a["IDF1"]:.1f} | {b["IDF1"]:.1f} | {a["MOTA"]:.1f} | {b["MOTA"]:.1f} | '
-              f'{a["MT %"]:.1f} | {b["MT %"]:.1f} | {a["IDsw"]} | {b["IDsw"]} |')
+        print(
+            f'| {name} | {a["IDF1"]:.1f} | {b["IDF1"]:.1f} | {a["MOTA"]:.1f} | {b["MOTA"]:.1f} | '
+            f'{a["MT %"]:.1f} | {b["MT %"]:.1f} | {a["IDsw"]} | {b["IDsw"]} |'
+        )
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / 'trials.json').write_text(json.dumps({'checkpoint': str(args.checkpoint), 'start': asdict(start),
-                                                      'best_changed': changed, 'at_start': defaults, 'best': tuned, 'trials': trials},
-                                                     indent=1, default=str))
+    (args.out / 'trials.json').write_text(
+        json.dumps(
+            {
+                'checkpoint': str(args.checkpoint),
+                'start': asdict(start),
+                'best_changed': changed,
+                'at_start': defaults,
+                'best': tuned,
+                'trials': trials,
+            },
+            indent=1,
+            default=str,
+        )
+    )
     plot(trials, args.out / 'tune_tracker.png')
     print(f'wrote {args.out}/trials.json, tune_tracker.png')
     return 0

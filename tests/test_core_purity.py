@@ -77,8 +77,13 @@ print(count)
 
 
 def test_cli_detector_catches_cli_imports(tmp_path):
-    for i, source in enumerate(('def f():\n    from matrix_core.cli.main import main\n',
-                                'import matrix_core.cli.calibrate\n', 'from matrix_core import cli, geometry\n')):
+    for i, source in enumerate(
+        (
+            'def f():\n    from matrix_core.cli.main import main\n',
+            'import matrix_core.cli.calibrate\n',
+            'from matrix_core import cli, geometry\n',
+        )
+    ):
         path = tmp_path / f'bad{i}.py'
         path.write_text(source)
         assert imports_cli(path), source

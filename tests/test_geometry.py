@@ -11,6 +11,7 @@ from matrix_core.geometry.homography import normalized
 @pytest.fixture
 def cam(matrix_sample):
     from matrix_core.datasets import MatrixDataset
+
     return MatrixDataset(matrix_sample).camera('D4', 2)
 
 
@@ -24,8 +25,9 @@ def test_projection_homography_and_backprojection_agree(cam):
     np.testing.assert_allclose(apply_homography(ideal.ground_H_img(), uv), ground[:, :2], atol=1e-6)
     # a raised plane: boards lie at z = 0.1 m
     raised = ground + [0, 0, 0.1]
-    np.testing.assert_allclose(apply_homography(ideal.img_H_ground(0.1), raised[:, :2]), ideal.project(raised),
-                               atol=1e-6)
+    np.testing.assert_allclose(
+        apply_homography(ideal.img_H_ground(0.1), raised[:, :2]), ideal.project(raised), atol=1e-6
+    )
     # with the real (tiny) distortion back-projection still inverts projection
     np.testing.assert_allclose(cam.backproject_to_ground(cam.project(ground)), ground, atol=1e-3)
 
@@ -62,7 +64,9 @@ def test_bev_grid_cells_and_homography():
     xy = np.array([[0.25, -29.75], [29.9, -0.1]])
     np.testing.assert_allclose(grid.world_to_cell(xy), [[0, 0], [59.3, 59.3]], atol=1e-9)
     np.testing.assert_allclose(grid.cell_to_world(grid.world_to_cell(xy)), xy)
-    np.testing.assert_allclose(apply_homography(grid.ground_H_grid, [[0, 0], [59, 59]]), [[0.25, -29.75], [29.75, -0.25]])
+    np.testing.assert_allclose(
+        apply_homography(grid.ground_H_grid, [[0, 0], [59, 59]]), [[0.25, -29.75], [29.75, -0.25]]
+    )
     assert grid.contains([[1, -1], [31, -1]]).tolist() == [True, False]
     with pytest.raises(ValueError):
         BevGrid(0, 0, 0, 1)
@@ -76,7 +80,7 @@ def test_quaternions_match_scipy_both_ways():
     from matrix_core.geometry.quaternion import matrix_from_quaternion, quaternion_from_matrix
 
     rotations = Rotation.random(200, random_state=3)
-    flips = Rotation.from_rotvec(np.pi * np.eye(3) * (1 - 1e-9))   # 180 deg about each axis
+    flips = Rotation.from_rotvec(np.pi * np.eye(3) * (1 - 1e-9))  # 180 deg about each axis
     for r in [*rotations, *flips, Rotation.identity()]:
         q = quaternion_from_matrix(r.as_matrix())
         expected = r.as_quat()

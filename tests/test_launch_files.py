@@ -20,21 +20,25 @@ EIGHT = [f'D{i}' for i in range(1, 9)]
 
 def _calib():
     from matrix_calib.settings import CalibNodeSettings
+
     return CalibNodeSettings
 
 
 def _register():
     from matrix_register.settings import RegisterNodeSettings
+
     return RegisterNodeSettings
 
 
 def _dataset_player():
     from matrix_ros.dataset_player import DatasetPlayerSettings
+
     return DatasetPlayerSettings
 
 
 def _fuse():
     from matrix_bev_tracker.settings import FuseNodeSettings
+
     return FuseNodeSettings
 
 
@@ -42,8 +46,7 @@ def _fuse():
 NODE_LAUNCH_FILES = {
     'matrix_calib/launch/calib.launch.py': ('matrix_calib', 'calib', _calib, {'views': EIGHT}, ()),
     'matrix_register/launch/register.launch.py': ('matrix_register', 'register', _register, {'views': EIGHT}, ()),
-    'matrix_ros/launch/dataset_player.launch.py': ('matrix_ros', 'dataset_player', _dataset_player, {},
-                                                   ('dataset',)),
+    'matrix_ros/launch/dataset_player.launch.py': ('matrix_ros', 'dataset_player', _dataset_player, {}, ('dataset',)),
 }
 GRAPH_LAUNCH_FILES = {'matrix_bringup/launch/full_graph.launch.py'}
 # ROS parameter files -> the settings of the node they are given to
@@ -76,13 +79,13 @@ def test_node_launch_file_arguments_are_the_node_settings(path):
     assert (node.package, node.executable, node.name) == (package, executable, executable)
     (params,) = node.parameters
     expected = settings_from_strings(cls, {**{n: setting_to_string(v) for n, v in defaults.items()}, **given})
-    for name in fields:   # every value typed as the node declares it; an empty list is the unset default
+    for name in fields:  # every value typed as the node declares it; an empty list is the unset default
         value = getattr(expected, name)
         if isinstance(value, (list, tuple)) and not value:
             assert name not in params, name
         else:
             value = list(value) if isinstance(value, tuple) else value
-            assert params[name] == value and type(params[name]) is type(value), name   # 1 is no double
+            assert params[name] == value and type(params[name]) is type(value), name  # 1 is no double
 
 
 def test_launch_arguments_are_parsed_and_validated_by_the_settings():
@@ -98,7 +101,7 @@ def test_launch_arguments_are_parsed_and_validated_by_the_settings():
 def test_parameter_files_list_only_values_that_differ_from_the_defaults(path):
     """Keys are the node's parameters; each value differs from its default (a default repeated here would
     hide a later change of the default)."""
-    (key, body), = yaml.safe_load((SRC / path).read_text()).items()
+    ((key, body),) = yaml.safe_load((SRC / path).read_text()).items()
     assert key == '/**', path
     params = body['ros__parameters'] or {}
     defaults = {name: default for name, _, default, _ in settings_fields(PARAMETER_FILES[path]())}

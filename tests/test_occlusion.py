@@ -10,14 +10,18 @@ BOX = [0.0, 0.0, 2.0, 2.0, 10.0]  # 2 x 2 m footprint, 10 m tall
 
 def test_segments_through_beside_over_and_under_the_box():
     origin = np.array([-5.0, 1.0, 4.0])
-    targets = np.array([[5.0, 1.0, 0.0],     # ground behind the box: blocked
-                         [-1.0, 1.0, 0.0],    # ground in front of it
-                         [5.0, 5.0, 0.0],     # passes beside it
-                         [5.0, 1.0, 30.0],    # passes over it
-                         [1.0, 1.0, 0.0],     # ground under the box: enters through its side
-                         [0.0, 1.0, 0.0],     # foot of the near wall: touches it only
-                         [2.0, 1.0, 0.0],     # foot of the far wall: crosses the box first
-                         [np.nan, 0.0, 0.0]])
+    targets = np.array(
+        [
+            [5.0, 1.0, 0.0],  # ground behind the box: blocked
+            [-1.0, 1.0, 0.0],  # ground in front of it
+            [5.0, 5.0, 0.0],  # passes beside it
+            [5.0, 1.0, 30.0],  # passes over it
+            [1.0, 1.0, 0.0],  # ground under the box: enters through its side
+            [0.0, 1.0, 0.0],  # foot of the near wall: touches it only
+            [2.0, 1.0, 0.0],  # foot of the far wall: crosses the box first
+            [np.nan, 0.0, 0.0],
+        ]
+    )
     assert segments_blocked(origin, targets, BOX).tolist() == [True, False, False, False, True, False, True, False]
 
 

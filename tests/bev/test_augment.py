@@ -1,7 +1,6 @@
 """Training augmentation: the scale-and-crop keeps each annotated foot point on its BEV cell and on the same
 image content; photometric changes keep the geometry; seeded runs repeat; disabled changes nothing."""
 
-
 import numpy as np
 import pytest
 import torch
@@ -15,10 +14,12 @@ from matrix_core.geometry.homography import apply_homography, pixel_scale_homogr
 
 SETTINGS = BevSettings(image_width=320, image_height=176, cell_m=0.25)
 FRAME = 2
-GEOMETRY_ONLY = AugmentConfig(enabled=True, p_photometric=0, p_blur=0, p_noise=0, p_jpeg=0, p_scale_crop=1,
-                              zoom=[0.8, 1.25], shift=0.15)
-PHOTOMETRIC_ONLY = AugmentConfig(enabled=True, p_photometric=1, p_greyscale=0.3, p_blur=1, p_noise=1, p_jpeg=1,
-                                 p_scale_crop=0)
+GEOMETRY_ONLY = AugmentConfig(
+    enabled=True, p_photometric=0, p_blur=0, p_noise=0, p_jpeg=0, p_scale_crop=1, zoom=[0.8, 1.25], shift=0.15
+)
+PHOTOMETRIC_ONLY = AugmentConfig(
+    enabled=True, p_photometric=1, p_greyscale=0.3, p_blur=1, p_noise=1, p_jpeg=1, p_scale_crop=0
+)
 
 
 def _rgb(images: torch.Tensor) -> np.ndarray:
@@ -30,8 +31,12 @@ def _bilinear(img: np.ndarray, uv: np.ndarray) -> np.ndarray:
     """(h, w, 3) image sampled at (N, 2) pixel-centre coordinates -> (N, 3)."""
     u0, v0 = np.floor(uv[:, 0]).astype(int), np.floor(uv[:, 1]).astype(int)
     a, b = (uv[:, 0] - u0)[:, None], (uv[:, 1] - v0)[:, None]
-    return ((1 - a) * (1 - b) * img[v0, u0] + a * (1 - b) * img[v0, u0 + 1]
-            + (1 - a) * b * img[v0 + 1, u0] + a * b * img[v0 + 1, u0 + 1])
+    return (
+        (1 - a) * (1 - b) * img[v0, u0]
+        + a * (1 - b) * img[v0, u0 + 1]
+        + (1 - a) * b * img[v0 + 1, u0]
+        + a * b * img[v0 + 1, u0 + 1]
+    )
 
 
 def test_scale_crop_keeps_foot_points_on_their_cells_and_content(matrix_sample):
@@ -39,8 +44,8 @@ def test_scale_crop_keeps_foot_points_on_their_cells_and_content(matrix_sample):
     clean = data.inputs(FRAME)
     aug = data.inputs(FRAME, np.random.default_rng(7))
     clean_img, aug_img = _rgb(clean['images']), _rgb(aug['images'])
-    feet = np.array(list(ground_truth_positions(data.dataset, FRAME).values()))          # (N, 2) metres
-    cells = apply_homography(np.linalg.inv(data.grid.ground_H_grid), feet)               # (N, 2) grid
+    feet = np.array(list(ground_truth_positions(data.dataset, FRAME).values()))  # (N, 2) metres
+    cells = apply_homography(np.linalg.inv(data.grid.ground_H_grid), feet)  # (N, 2) grid
     input_H_feat = pixel_scale_homography(data.stride, data.stride)
     img_H_input = pixel_scale_homography(*(np.array(data.dataset.image_size) / data.input_size))
     w, h = data.input_size
@@ -70,23 +75,35 @@ def test_scale_crop_keeps_foot_points_on_their_cells_and_content(matrix_sample):
         errors.append(np.abs(aug_img[i][q[:, 1].astype(int), q[:, 0].astype(int)] - _bilinear(clean_img[i], src)))
         # the old homography would be wrong: the test has the power to see a stale feat_H_grid
         stale = np.round(p_clean[inside])
-        wrong.append(np.abs(aug_img[i][stale[:, 1].astype(int), stale[:, 0].astype(int)] -
-                            clean_img[i][stale[:, 1].astype(int), stale[:, 0].astype(int)]))
+        wrong.append(
+            np.abs(
+                aug_img[i][stale[:, 1].astype(int), stale[:, 0].astype(int)]
+                - clean_img[i][stale[:, 1].astype(int), stale[:, 0].astype(int)]
+            )
+        )
         moved.append(np.linalg.norm(p_aug[inside] - p_clean[inside], axis=1))
         checked += int(inside.sum())
     errors, wrong, moved = np.concatenate(errors), np.concatenate(wrong), np.concatenate(moved)
-    print(f'{checked} foot points; moved median {np.median(moved):.1f} px; content error mean '
-          f'{errors.mean():.2f} max {errors.max():.1f}; stale homography mean {wrong.mean():.1f}')
-    assert checked >= 40 and np.median(moved) > 5.0          # a strong transform, many points
+    print(
+        f'{checked} foot points; moved median {np.median(moved):.1f} px; content error mean '
+        f'{errors.mean():.2f} max {errors.max():.1f}; stale homography mean {wrong.mean():.1f}'
+    )
+    assert checked >= 40 and np.median(moved) > 5.0  # a strong transform, many points
     assert errors.mean() < 1.0 and errors.max() < 3.0
     assert wrong.mean() > 5 * errors.mean() + 5.0
 
 
 def test_scale_crop_pads_with_the_normalised_zero(matrix_sample):
-    data = BevFrames(matrix_sample, SETTINGS, frames=[FRAME], augment=AugmentConfig(
-        enabled=True, p_photometric=0, p_blur=0, p_noise=0, p_jpeg=0, p_scale_crop=1, zoom=[0.8, 0.8], shift=0))
+    data = BevFrames(
+        matrix_sample,
+        SETTINGS,
+        frames=[FRAME],
+        augment=AugmentConfig(
+            enabled=True, p_photometric=0, p_blur=0, p_noise=0, p_jpeg=0, p_scale_crop=1, zoom=[0.8, 0.8], shift=0
+        ),
+    )
     images = data.inputs(FRAME, np.random.default_rng(0))['images']
-    assert np.abs(images[:, :, :4, :].numpy()).max() < 0.03       # zoomed out: a padded border, ~0 input
+    assert np.abs(images[:, :, :4, :].numpy()).max() < 0.03  # zoomed out: a padded border, ~0 input
     assert np.allclose(np.array(PAD_RGB) / 255.0, MEAN)
 
 
@@ -96,7 +113,7 @@ def test_photometric_changes_keep_the_homography(matrix_sample):
     assert torch.equal(clean['feat_H_grid'], aug['feat_H_grid'])
     assert torch.equal(clean['view_mask'], aug['view_mask'])
     diff = (_rgb(clean['images']) - _rgb(aug['images'])).reshape(len(data.views), -1)
-    assert (np.abs(diff).mean(1) > 2.0).all()                   # every view changed
+    assert (np.abs(diff).mean(1) > 2.0).all()  # every view changed
     rgb = data.rgb(data.views[0], FRAME)
     out = photometric(rgb, PHOTOMETRIC_ONLY, np.random.default_rng(1))
     assert out.shape == rgb.shape and out.dtype == np.uint8
@@ -123,7 +140,7 @@ def test_disabled_is_identical_to_no_augmentation(matrix_sample):
     state = rng.bit_generator.state
     assert off.augment is None and augment_rng(off, rng) is None and rng.bit_generator.state == state
     expected = plain[1]
-    for got in (off.sample(1, np.random.default_rng(1)), on[1], on.sample(1)):    # no generator: clean
+    for got in (off.sample(1, np.random.default_rng(1)), on[1], on.sample(1)):  # no generator: clean
         for key, value in expected.items():
             assert torch.equal(got[key], value) if isinstance(value, torch.Tensor) else got[key] == value
 
@@ -150,8 +167,11 @@ def test_training_step_with_augmentation(matrix_sample):
 
     torch.set_num_threads(1)
     bev = BevSettings(model='bev_tiny', image_width=160, image_height=96, cell_m=0.5)
-    config = TrainConfig(train=[SequenceSpec(str(matrix_sample), frames=[1, 2])], bev=bev,
-                         augment=AugmentConfig(enabled=True, p_scale_crop=1, p_photometric=1))
+    config = TrainConfig(
+        train=[SequenceSpec(str(matrix_sample), frames=[1, 2])],
+        bev=bev,
+        augment=AugmentConfig(enabled=True, p_scale_crop=1, p_photometric=1),
+    )
     train_seq, val_seq = open_sequences(config.train, config, training=True), open_sequences(config.train, config)
     assert train_seq[0].augment is config.augment and val_seq[0].augment is None
     torch.manual_seed(0)

@@ -27,7 +27,7 @@ def test_average_state_dicts_means_floats_and_keeps_the_last_counters():
 def test_recompute_batch_norm_measures_the_plain_mean_of_what_it_is_shown():
     torch.manual_seed(0)
     model = nn.Sequential(nn.Linear(3, 2), nn.BatchNorm1d(2)).eval()
-    model[1].running_mean.fill_(50.0)                        # stale statistics of other weights
+    model[1].running_mean.fill_(50.0)  # stale statistics of other weights
     batches = [torch.randn(8, 3) + k for k in range(4)]
 
     def show(m):
@@ -38,7 +38,7 @@ def test_recompute_batch_norm_measures_the_plain_mean_of_what_it_is_shown():
     with torch.no_grad():
         expected = torch.stack([model[0](x).mean(dim=0) for x in batches]).mean(dim=0)
     assert torch.allclose(model[1].running_mean, expected, atol=1e-5)
-    assert not model.training and model[1].momentum == 0.1   # mode and momentum restored
+    assert not model.training and model[1].momentum == 0.1  # mode and momentum restored
 
 
 @pytest.mark.slow

@@ -23,10 +23,27 @@ def sequence(tmp_path_factory):
     """4 simulated complex frames at 1920x1080 (the calibration config's size) with calibrate + register."""
     root = tmp_path_factory.mktemp('sources')
     data, pnp, reg = root / 'data', root / 'pnp', root / 'reg'
-    assert main(['simulate', '--config', 'complex', '--frames', '4', '--seed', '5', '--out', str(data),
-                 '--image_ext', '.jpg']) == 0
-    assert main(['calibrate', str(data), '--out', str(pnp),
-                 '--config', str(default_config_path('sim_complex.yaml'))]) == 0
+    assert (
+        main(
+            [
+                'simulate',
+                '--config',
+                'complex',
+                '--frames',
+                '4',
+                '--seed',
+                '5',
+                '--out',
+                str(data),
+                '--image_ext',
+                '.jpg',
+            ]
+        )
+        == 0
+    )
+    assert (
+        main(['calibrate', str(data), '--out', str(pnp), '--config', str(default_config_path('sim_complex.yaml'))]) == 0
+    )
     assert main(['register', str(data), '--out', str(reg)]) == 0
     return data, pnp, reg
 
@@ -44,8 +61,13 @@ def pixel_errors(dataset, homography_of, view, frame) -> np.ndarray:
         return p[:, :2] / p[:, 2:], p[:, 2]
 
     true_uv, depth = project(cam.img_H_ground())
-    inside = (depth > 0) & (true_uv[:, 0] >= 0) & (true_uv[:, 0] < cam.width) & (true_uv[:, 1] >= 0) & \
-        (true_uv[:, 1] < cam.height)
+    inside = (
+        (depth > 0)
+        & (true_uv[:, 0] >= 0)
+        & (true_uv[:, 0] < cam.width)
+        & (true_uv[:, 1] >= 0)
+        & (true_uv[:, 1] < cam.height)
+    )
     H, size = homography_of(view, frame)
     assert size == (cam.width, cam.height)
     uv, _ = project(H)
@@ -109,8 +131,25 @@ def test_registration_source_matches_ground_truth_and_masks_failures(sequence, t
 def test_evaluate_cli_takes_a_calibration_dir(sequence, tmp_path, capsys):
     data, pnp, _ = sequence
     ckpt = shipped_checkpoint()
-    assert main(['evaluate', str(data), '--checkpoint', str(ckpt), '--calibration', 'pnp', '--calibration-dir',
-                 str(pnp), '--out', str(tmp_path), '--heatmaps', '1']) == 0
+    assert (
+        main(
+            [
+                'evaluate',
+                str(data),
+                '--checkpoint',
+                str(ckpt),
+                '--calibration',
+                'pnp',
+                '--calibration-dir',
+                str(pnp),
+                '--out',
+                str(tmp_path),
+                '--heatmaps',
+                '1',
+            ]
+        )
+        == 0
+    )
     metrics = json.loads((tmp_path / 'metrics.json').read_text())
     assert metrics['calibration'] == 'pnp' and metrics['calibration_dir'] == str(pnp)
     assert metrics['detection']['num_gt'] > 0 and 'MODA' in capsys.readouterr().out

@@ -13,7 +13,7 @@ def test_calibration_sources(matrix_sample):
     gt = BevFrames(matrix_sample, SETTINGS, frames=[1, 3], cache_images=False)
     frozen = BevFrames(matrix_sample, SETTINGS, frames=[1, 3], calibration='frozen_first', cache_images=False)
     ref = BevFrames(matrix_sample, SETTINGS, frames=[1, 3], calibration='reference', cache_images=False)
-    np.testing.assert_allclose(gt.homographies(1), frozen.homographies(1))      # same at the first frame
+    np.testing.assert_allclose(gt.homographies(1), frozen.homographies(1))  # same at the first frame
     # drones move: by frame 3 the frozen homography maps the grid elsewhere (many feature pixels)
     assert np.abs(gt.homographies(3) - frozen.homographies(3)).max() > 1e-3
     centre = np.array([gt.grid.nx / 2, gt.grid.ny / 2, 1.0])

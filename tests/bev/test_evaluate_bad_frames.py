@@ -34,30 +34,32 @@ def replace(path: Path, data: bytes) -> None:
 
 
 def _evaluate(dataset, out, *extra):
-    return main(['evaluate', str(dataset), '--checkpoint', str(CHECKPOINT), '--out', str(out), '--heatmaps', '1',
-                 *extra])
+    return main(
+        ['evaluate', str(dataset), '--checkpoint', str(CHECKPOINT), '--out', str(out), '--heatmaps', '1', *extra]
+    )
 
 
 def test_damaged_frames_and_views_are_reported_and_the_run_finishes(matrix_sample, tmp_path, capsys, monkeypatch):
     data = linked_copy(matrix_sample, tmp_path / 'sample')
     images, calib = data / 'image_subsets', data / 'calibrations'
-    replace(images / 'D2' / '0001.jpg', b'')                                     # zero bytes
-    replace(images / 'D3' / '0002.jpg', b'\xff\xd8 not a jpeg at all' * 50)     # corrupt
+    replace(images / 'D2' / '0001.jpg', b'')  # zero bytes
+    replace(images / 'D3' / '0002.jpg', b'\xff\xd8 not a jpeg at all' * 50)  # corrupt
     small = cv2.resize(cv2.imread(str(matrix_sample / 'image_subsets/D4/0003.jpg')), (960, 540))
     (images / 'D4' / '0003.jpg').unlink()
-    cv2.imwrite(str(images / 'D4' / '0003.jpg'), small)                          # wrong size
-    (calib / 'extrinsic' / 'extr_Drone5_0001.xml').unlink()                       # a view's calibration missing
+    cv2.imwrite(str(images / 'D4' / '0003.jpg'), small)  # wrong size
+    (calib / 'extrinsic' / 'extr_Drone5_0001.xml').unlink()  # a view's calibration missing
     text = (matrix_sample / 'calibrations/extrinsic/extr_Drone6_0002.xml').read_bytes()
-    replace(calib / 'extrinsic' / 'extr_Drone6_0002.xml', text[:len(text) // 2])  # truncated XML
+    replace(calib / 'extrinsic' / 'extr_Drone6_0002.xml', text[: len(text) // 2])  # truncated XML
     replace(data / 'matchings' / 'Pedestrians' / '3d_0003.txt', b'1 2 three\n')  # ground truth unreadable
-    (calib / 'intrinsic' / 'intr_Drone7_0004.xml').unlink()                       # frame 4 incomplete
+    (calib / 'intrinsic' / 'intr_Drone7_0004.xml').unlink()  # frame 4 incomplete
 
     step = SequenceRunner.step
 
-    def failing_step(self, frame, *args):   # the model (decoding) raising in one frame
+    def failing_step(self, frame, *args):  # the model (decoding) raising in one frame
         if frame == 1:
             raise RuntimeError('injected decode failure')
         return step(self, frame, *args)
+
     monkeypatch.setattr(SequenceRunner, 'step', failing_step)
 
     out = tmp_path / 'eval'
@@ -90,8 +92,11 @@ def test_damaged_frames_and_views_are_reported_and_the_run_finishes(matrix_sampl
 
 def _record(camera, ok=True) -> dict:
     """A registration record whose ground homography is that of ``camera`` (what a perfect register writes)."""
-    return registration_to_record(Registration(STATUS_OK, np.eye(3), np.linalg.inv(camera.img_H_ground()),
-                                               confidence=1.0, matches=100, inliers=100))
+    return registration_to_record(
+        Registration(
+            STATUS_OK, np.eye(3), np.linalg.inv(camera.img_H_ground()), confidence=1.0, matches=100, inliers=100
+        )
+    )
 
 
 def test_broken_registration_records_mask_their_view(matrix_sample, tmp_path, capsys):
@@ -112,8 +117,9 @@ def test_broken_registration_records_mask_their_view(matrix_sample, tmp_path, ca
     (reg / record_name('D3', 2)).write_text('{"status": "ok", "H_img_to')
 
     out = tmp_path / 'eval'
-    assert _evaluate(matrix_sample, out, '--calibration', 'registration', '--calibration-dir',
-                     str(tmp_path / 'reg')) == 0
+    assert (
+        _evaluate(matrix_sample, out, '--calibration', 'registration', '--calibration-dir', str(tmp_path / 'reg')) == 0
+    )
     failures = json.loads((out / 'metrics.json').read_text())['failures']
     masked = {(m['view'], m['frame']): m['reason'] for m in failures['masked_views']}
     assert (failures['frames_failed'], failures['frames_scored']) == (0, 5)

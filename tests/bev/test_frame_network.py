@@ -53,8 +53,11 @@ def each_shipped(request, shipped):
 def test_outputs_equal_the_model_over_a_sequence(each_shipped):
     model, settings, data = each_shipped
     network = FrameNetwork(model, data.grid.shape)
-    masks = [torch.ones(8, dtype=torch.bool), torch.tensor([1, 0, 1, 1, 0, 1, 1, 1], dtype=torch.bool),
-             torch.ones(8, dtype=torch.bool)]
+    masks = [
+        torch.ones(8, dtype=torch.bool),
+        torch.tensor([1, 0, 1, 1, 0, 1, 1, 1], dtype=torch.bool),
+        torch.ones(8, dtype=torch.bool),
+    ]
     previous_eager = previous = None
     for frame, mask in zip(data.frames, masks):
         x = data.inputs(frame)
@@ -72,9 +75,16 @@ def test_runner_detections_equal_decoding_the_model(each_shipped):
     for frame in data.frames:
         x = data.inputs(frame)
         ref = eager(model, x, x['view_mask'], data.grid.shape, previous)
-        expected = decode_detections(ref['heatmap'][0], ref['offset'][0], ref['tracking'][0], data.grid,
-                                     settings.score_threshold, settings.nms_radius_m, settings.max_detections,
-                                     settings.subcell)
+        expected = decode_detections(
+            ref['heatmap'][0],
+            ref['offset'][0],
+            ref['tracking'][0],
+            data.grid,
+            settings.score_threshold,
+            settings.nms_radius_m,
+            settings.max_detections,
+            settings.subcell,
+        )
         got = runner.step(frame, x['images'], x['feat_H_grid'], x['view_mask'])
         assert_detections_equal(got.detections, expected)
         np.testing.assert_allclose(got.heatmap, torch.sigmoid(ref['heatmap'][0, 0]).numpy(), atol=1e-4)
@@ -87,7 +97,7 @@ def test_a_changed_homography_is_not_served_from_the_cache(shipped):
     a, b = data.inputs(0), data.inputs(1)
     mask = torch.ones(8, dtype=torch.bool)
     network(a['images'], a['feat_H_grid'], mask)
-    assert not torch.equal(a['feat_H_grid'], b['feat_H_grid'])     # the drones moved
+    assert not torch.equal(a['feat_H_grid'], b['feat_H_grid'])  # the drones moved
     out = network(a['images'], b['feat_H_grid'], mask)
     ref = eager(model, {'images': a['images'], 'feat_H_grid': b['feat_H_grid']}, mask, data.grid.shape)
     torch.testing.assert_close(out.heatmap, ref['heatmap'][0], atol=1e-3, rtol=0)
@@ -106,7 +116,7 @@ def test_offset_head_at_peaks_equals_the_full_map(shipped):
     x = data.inputs(2)
     network = FrameNetwork(model, data.grid.shape)
     out = network(x['images'], x['feat_H_grid'], x['view_mask'])
-    rows, cols = torch.tensor([0, 5, 64, 127]), torch.tensor([0, 127, 64, 3])   # borders: zero padding
+    rows, cols = torch.tensor([0, 5, 64, 127]), torch.tensor([0, 127, 64, 3])  # borders: zero padding
     tracking, offset = network.heads_at(out.fused, rows, cols, offset=True)
     with torch.no_grad():
         full = model.heads(out.fused.contiguous())
@@ -122,14 +132,14 @@ def test_fold_batch_norms_keeps_the_function():
     x = torch.randn(2, 3, 32, 48)
     folded = fold_batch_norms(model.encoder)
     assert not any(isinstance(m, torch.nn.BatchNorm2d) for m in folded.modules())
-    assert any(isinstance(m, torch.nn.BatchNorm2d) for m in model.encoder.modules())   # a copy: model intact
+    assert any(isinstance(m, torch.nn.BatchNorm2d) for m in model.encoder.modules())  # a copy: model intact
     with torch.no_grad():
         torch.testing.assert_close(folded(x), model.encoder(x), atol=1e-5, rtol=1e-5)
 
 
 def test_an_encoder_with_signed_features_is_refused():
     model = build_model('bev_tiny').eval()
-    model.encoder.fuse = model.encoder.fuse[:1]      # no final ReLU: the pooling's shortcut would be wrong
+    model.encoder.fuse = model.encoder.fuse[:1]  # no final ReLU: the pooling's shortcut would be wrong
     with pytest.raises(ValueError, match='non-negative encoder features'):
         FrameNetwork(model, (8, 8))
 
@@ -150,7 +160,7 @@ def test_a_warmed_up_network_gives_the_same_outputs_and_keeps_nothing(shipped):
     cold, warm = FrameNetwork(model, data.grid.shape), FrameNetwork(model, data.grid.shape)
     x = data.inputs(data.frames[0])
     warm.warm_up(len(x['images']), (x['images'].shape[-1], x['images'].shape[-2]))
-    assert not warm._taps   # no lifting taps of the zeros' identity warp is served to a real frame
+    assert not warm._taps  # no lifting taps of the zeros' identity warp is served to a real frame
     mask, previous = torch.ones(len(x['images']), dtype=torch.bool), {}
     for network in (cold, warm):
         first = network(x['images'], x['feat_H_grid'], mask)
@@ -169,7 +179,7 @@ def test_the_carry_computed_on_demand_or_ahead_gives_the_same_next_frame(shipped
     mask = torch.ones(len(x0['images']), dtype=torch.bool)
     first = network(x0['images'], x0['feat_H_grid'], mask)
     with_previous = network(x1['images'], x1['feat_H_grid'], mask, first.carry)
-    assert callable(with_previous._carry)   # not computed: nobody read it yet
+    assert callable(with_previous._carry)  # not computed: nobody read it yet
     reference = network(x0['images'], x1['feat_H_grid'], mask, with_previous.carry)
     for prepare in (False, True):
         second = network(x1['images'], x1['feat_H_grid'], mask, first)

@@ -35,7 +35,7 @@ def run(model, item, grid_shape, mask=None, images=None, previous=None):
 def test_output_shapes(model, frame_inputs):
     data, item = frame_inputs
     assert item['images'].shape == (8, 3, 96, 160) and item['feat_H_grid'].shape == (8, 3, 3)
-    assert data.grid.shape == (64, 64)                      # 30 m + 2 x 1 m margin at 0.5 m
+    assert data.grid.shape == (64, 64)  # 30 m + 2 x 1 m margin at 0.5 m
     out = run(model, item, data.grid.shape)
     assert out['heatmap'].shape == (1, 1, 64, 64)
     assert out['offset'].shape == out['tracking'].shape == (1, 2, 64, 64)
@@ -48,10 +48,10 @@ def test_missing_view_is_a_mask_bit_not_data(model, frame_inputs):
     mask = item['view_mask'].clone()
     mask[[1, 5]] = False
     noisy = item['images'].clone()
-    noisy[[1, 5]] = torch.randn_like(noisy[[1, 5]]) * 5      # garbage in the masked views ...
+    noisy[[1, 5]] = torch.randn_like(noisy[[1, 5]]) * 5  # garbage in the masked views ...
     a = run(model, item, data.grid.shape, mask)
     b = run(model, item, data.grid.shape, mask, images=noisy)
-    torch.testing.assert_close(a['heatmap'], b['heatmap'])   # ... changes nothing
+    torch.testing.assert_close(a['heatmap'], b['heatmap'])  # ... changes nothing
     full = run(model, item, data.grid.shape)
     assert not torch.allclose(full['heatmap'], a['heatmap'])  # while the views do count when present
 

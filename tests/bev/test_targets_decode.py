@@ -20,26 +20,34 @@ def test_targets_decode_to_ground_truth(matrix_sample):
     assert t['heatmap'].shape == (1,) + grid.shape and t['center_mask'].sum() == 40
     assert t['heatmap'].max() == 1.0 and (t['heatmap'] == 1).sum() == 40
     logits = torch.logit(torch.from_numpy(t['heatmap']).clamp(1e-4, 1 - 1e-4))
-    dets = decode_detections(logits, torch.from_numpy(t['offset']), torch.from_numpy(t['tracking']), grid,
-                             score_threshold=0.5, nms_radius_m=0.5, subcell='offset')
+    dets = decode_detections(
+        logits,
+        torch.from_numpy(t['offset']),
+        torch.from_numpy(t['tracking']),
+        grid,
+        score_threshold=0.5,
+        nms_radius_m=0.5,
+        subcell='offset',
+    )
     assert len(dets) == 40
     gt_xy = np.array([pos[i] for i in sorted(pos)])
     d = np.linalg.norm(dets.xy[:, None] - gt_xy[None], axis=2)
     nearest = d.argmin(1)
-    assert d.min(1).max() < 1e-5                            # exact positions via the sub-cell offsets
+    assert d.min(1).max() < 1e-5  # exact positions via the sub-cell offsets
     ids = sorted(pos)
-    back = dets.xy + dets.offsets                           # tracking offsets lead to the previous positions
+    back = dets.xy + dets.offsets  # tracking offsets lead to the previous positions
     np.testing.assert_allclose(back, [prev[ids[k]] for k in nearest], atol=1e-5)
     m = detection_metrics(BevPoints(np.zeros(40), gt_xy), BevPoints(np.zeros(len(dets)), dets.xy))
     assert m.moda == 1.0
     # the 3x3 score centroid of the Gaussian targets alone recovers much of the sub-cell position
     error = {}
     for subcell in ('heatmap', 'none'):
-        xy = decode_detections(logits, torch.zeros(2, *grid.shape), torch.zeros(2, *grid.shape), grid, 0.5, 0.5,
-                               subcell=subcell).xy
+        xy = decode_detections(
+            logits, torch.zeros(2, *grid.shape), torch.zeros(2, *grid.shape), grid, 0.5, 0.5, subcell=subcell
+        ).xy
         error[subcell] = np.linalg.norm(xy[:, None] - gt_xy[None], axis=2).min(1).mean()
     print(error)
-    assert error['heatmap'] < 0.7 * error['none']     # 0.060 vs 0.101 m (the 3x3 window truncates)
+    assert error['heatmap'] < 0.7 * error['none']  # 0.060 vs 0.101 m (the 3x3 window truncates)
 
 
 def test_nms_keeps_one_peak_per_person():
@@ -48,8 +56,8 @@ def test_nms_keeps_one_peak_per_person():
     grid = BevGrid(0, 0, 5, 5, 0.25)
     heat = torch.full((1, 20, 20), -10.0)
     heat[0, 10, 10] = 3.0
-    heat[0, 10, 11] = 2.0            # shoulder of the same peak: suppressed
-    heat[0, 2, 2] = 1.0              # another person
+    heat[0, 10, 11] = 2.0  # shoulder of the same peak: suppressed
+    heat[0, 2, 2] = 1.0  # another person
     zeros = torch.zeros(2, 20, 20)
     dets = decode_detections(heat, zeros, zeros, grid, score_threshold=0.5, nms_radius_m=0.5, subcell='none')
     assert len(dets) == 2 and dets.scores[0] > dets.scores[1]

@@ -30,7 +30,7 @@ def test_training_steps_reduce_the_loss(matrix_sample):
     rng = np.random.default_rng(0)
 
     def loss_now():
-        model.train()     # batch statistics: after 12 steps the running ones are not settled yet
+        model.train()  # batch statistics: after 12 steps the running ones are not settled yet
         with torch.no_grad():
             return float(training_step(model, [data], [(0, 1)], config, rng)['total'])
 
@@ -51,8 +51,23 @@ def test_train_resume_and_evaluate_cli(matrix_sample, tmp_path, monkeypatch, cap
     cfg = tiny_config(tmp_path, matrix_sample, monkeypatch, 'epochs: 1\nseed: 3\n')
     out = tmp_path / 'run'
     assert main(['train', '--config', str(cfg), '--out', str(out)]) == 0
-    assert main(['train', '--config', str(cfg), '--out', str(out), '--resume', '--epochs', '2',
-                 '--export', str(tmp_path / 'shipped.pt')]) == 0
+    assert (
+        main(
+            [
+                'train',
+                '--config',
+                str(cfg),
+                '--out',
+                str(out),
+                '--resume',
+                '--epochs',
+                '2',
+                '--export',
+                str(tmp_path / 'shipped.pt'),
+            ]
+        )
+        == 0
+    )
     shipped = torch.load(tmp_path / 'shipped.pt', weights_only=False)
     assert set(shipped) == {'model', 'settings', 'epoch', 'history', 'trained_with'} and shipped['epoch'] == 2
     history = json.loads((out / 'history.json').read_text())
@@ -60,9 +75,29 @@ def test_train_resume_and_evaluate_cli(matrix_sample, tmp_path, monkeypatch, cap
     assert (out / 'best.pt').is_file() and (out / 'last.pt').is_file()
     capsys.readouterr()
     ev = tmp_path / 'eval'
-    assert main(['evaluate', str(matrix_sample), '--checkpoint', str(out / 'last.pt'), '--out', str(ev),
-                 '--frames', '3', '4', '--drop-views', 'D2', 'D6', '--calibration', 'frozen_first',
-                 '--score-threshold', '0.05']) == 0
+    assert (
+        main(
+            [
+                'evaluate',
+                str(matrix_sample),
+                '--checkpoint',
+                str(out / 'last.pt'),
+                '--out',
+                str(ev),
+                '--frames',
+                '3',
+                '4',
+                '--drop-views',
+                'D2',
+                'D6',
+                '--calibration',
+                'frozen_first',
+                '--score-threshold',
+                '0.05',
+            ]
+        )
+        == 0
+    )
     text = capsys.readouterr().out
     assert 'MODA (@0.5 m)' in text and 'IDF1' in text
     metrics = json.loads((ev / 'metrics.json').read_text())
@@ -97,8 +132,10 @@ def test_offset_heads_overfit_a_few_frames(matrix_sample):
     zero = {}
     for k in (1, 2):
         item = data[k]
-        zero[k] = (float(item['offset'][:, item['center_mask'][0] > 0].abs().mean()),
-                   float(item['tracking'][:, item['tracking_mask'][0] > 0].abs().mean()))
+        zero[k] = (
+            float(item['offset'][:, item['center_mask'][0] > 0].abs().mean()),
+            float(item['tracking'][:, item['tracking_mask'][0] > 0].abs().mean()),
+        )
     for step in range(200):
         terms = training_step(model, [data], [(0, 1 + step % 2)], config, rng)
         opt.zero_grad()
@@ -108,21 +145,24 @@ def test_offset_heads_overfit_a_few_frames(matrix_sample):
     with torch.no_grad():
         for k in (1, 2):
             terms = training_step(model, [data], [(0, k)], config, rng)
-            print(f"frame {k}: offset L1 {float(terms['offset']):.3f} m (zero {zero[k][0]:.3f}), "
-                  f"tracking L1 {float(terms['tracking']):.3f} m (zero {zero[k][1]:.3f})")
+            print(
+                f"frame {k}: offset L1 {float(terms['offset']):.3f} m (zero {zero[k][0]:.3f}), "
+                f"tracking L1 {float(terms['tracking']):.3f} m (zero {zero[k][1]:.3f})"
+            )
             assert float(terms['offset']) < 0.5 * zero[k][0]
             assert float(terms['tracking']) < 0.5 * zero[k][1]
         x, prev = data.inputs(2), data.inputs(1)
         shape = data.grid.shape
         previous = model(prev['images'][None], prev['feat_H_grid'][None], prev['view_mask'][None], shape)['bev']
         out = model(x['images'][None], x['feat_H_grid'][None], x['view_mask'][None], shape, previous)
-    dets = decode_detections(out['heatmap'][0], out['offset'][0], out['tracking'][0], data.grid, 0.3,
-                             subcell='offset')
+    dets = decode_detections(out['heatmap'][0], out['offset'][0], out['tracking'][0], data.grid, 0.3, subcell='offset')
     truth = np.array(list(ground_truth_positions(data.dataset, 2).values()))
     cells = data.grid.cell_to_world(np.round(data.grid.world_to_cell(dets.xy)))
     nearest = lambda xy: np.linalg.norm(xy[:, None] - truth[None], axis=2).min(axis=1)
-    print(f'{len(dets)} detections, {len(truth)} people; error with offsets {np.median(nearest(dets.xy)):.3f} m, '
-          f'cell centres {np.median(nearest(cells)):.3f} m')
+    print(
+        f'{len(dets)} detections, {len(truth)} people; error with offsets {np.median(nearest(dets.xy)):.3f} m, '
+        f'cell centres {np.median(nearest(cells)):.3f} m'
+    )
     assert len(dets) >= 0.9 * len(truth)
     assert np.median(nearest(dets.xy)) < 0.6 * np.median(nearest(cells))
 
@@ -139,7 +179,7 @@ def test_validation_record_weights_the_selection_score():
     record = validation_record(specs, [result(0.9, 0.8, 0.7), result(0.7, 0.6, 0.5), result(0.5, 0.4, 0.3)])
     assert record['val_moda'] == pytest.approx(0.7) and record['val_idf1'] == pytest.approx(0.5)
     assert record['val_moda[matrix_sample]'] == 0.5 and record['val_mota[sim_a]'] == 0.8
-    assert record['val_score'] == pytest.approx((0.9 + 0.7 + 2 * 0.5) / 4)     # not the plain mean 0.7
+    assert record['val_score'] == pytest.approx((0.9 + 0.7 + 2 * 0.5) / 4)  # not the plain mean 0.7
     with pytest.raises(ValueError, match='weight'):
         SequenceSpec('data/sim_a', weight=-1.0)
 

@@ -92,8 +92,9 @@ def test_the_valid_correlation_is_scipys():
 
     rng = np.random.default_rng(0)
     values, template = rng.normal(size=(27, 31)), np.where(rng.random((20, 20)) < 0.5, -1.0, 1.0)
-    np.testing.assert_allclose(correlate_valid(values, template), correlate2d(values, template, mode='valid'),
-                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(
+        correlate_valid(values, template), correlate2d(values, template, mode='valid'), rtol=1e-12, atol=1e-12
+    )
     assert correlate_valid(values, template).shape == (8, 12)
 
 
@@ -160,7 +161,7 @@ def test_saddles_from_a_solved_pose_are_those_of_refining_every_corner(dataset, 
         assert np.sum(fast.polarity != full.polarity) <= 0.01 * len(fast.ij)
         np.testing.assert_allclose(fast.uv[same], full.uv[same], atol=1e-3)
         verified += int(np.sum(same))
-    assert verified > 200   # the comparison covers the boards in view
+    assert verified > 200  # the comparison covers the boards in view
 
 
 @pytest.mark.parametrize('view, frame', [('D1', 2), ('D5', 1)])
@@ -169,7 +170,7 @@ def test_tracking_recovers_from_a_guide_a_fraction_of_a_square_off(dataset, scen
     the strict first pass verifies too few saddles; the second try (track_start_move) gets the true pose."""
     gray = cv2.cvtColor(dataset.load_image(view, frame), cv2.COLOR_BGR2GRAY)
     truth = scene.camera(dataset.camera(view, frame).cam_T_world)
-    tilt = cv2.Rodrigues(np.array([np.deg2rad(0.06), 0.0, 0.0]))[0]   # about the camera's x axis, centre kept
+    tilt = cv2.Rodrigues(np.array([np.deg2rad(0.06), 0.0, 0.0]))[0]  # about the camera's x axis, centre kept
     T = truth.cam_T_world.copy()
     T[:3, :3], T[:3, 3] = tilt @ truth.R, tilt @ truth.t
     predicted = predict_boards(scene.boards, scene.camera(T))
@@ -183,8 +184,7 @@ def test_tracking_recovers_from_a_guide_a_fraction_of_a_square_off(dataset, scen
 
 def test_tracker_follows_drone_5(dataset, scene):
     """Reference pose as the first prior, then the previous result: every frame ok and accurate."""
-    cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera('D5'),
-                          dataset.reference_image('D5'))
+    cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera('D5'), dataset.reference_image('D5'))
     for index, frame in enumerate(dataset.frames):
         r = cal.process(dataset.load_image('D5', frame), 0.5 * index)
         assert r.status == OK, r.message
@@ -211,8 +211,10 @@ def test_stale_keeps_last_good_pose_and_failed_has_none(dataset, scene):
 
 def test_cli_writes_calibrations_the_reader_reads(dataset, tmp_path, capsys):
     out = tmp_path / 'calib'
-    assert cli_main(['calibrate', str(dataset.root), '--out', str(out), '--views', 'D5', '--max-frames', '2',
-                     '--compare']) == 0
+    assert (
+        cli_main(['calibrate', str(dataset.root), '--out', str(out), '--views', 'D5', '--max-frames', '2', '--compare'])
+        == 0
+    )
     printed = capsys.readouterr().out
     assert 'vs stored calibration' in printed
     written = open_dataset(out)
@@ -231,8 +233,7 @@ def test_acceptance_real_sample_all_drones(dataset, scene):
     far, grazing boards of D3 and D7 are not found in some frames)."""
     rot, centre = [], []
     for view in dataset.views:
-        cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view),
-                              dataset.reference_image(view))
+        cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view), dataset.reference_image(view))
         for index, frame in enumerate(dataset.frames):
             r = cal.process(dataset.load_image(view, frame), 0.5 * index)
             if r.status == OK:
@@ -247,9 +248,10 @@ def test_acceptance_real_sample_all_drones(dataset, scene):
 def test_results_do_not_depend_on_other_drones_in_the_process(dataset, scene):
     """OpenCV's RNG is seeded per image: D4 alone and D4 interleaved with D1 (one process hosting both, as
     the calib node does) give identical poses."""
+
     def calibrator(view):
-        return DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view),
-                               dataset.reference_image(view))
+        return DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view), dataset.reference_image(view))
+
     alone, shared, other = calibrator('D4'), calibrator('D4'), calibrator('D1')
     for frame in (1, 2):
         a = alone.process(dataset.load_image('D4', frame), frame)
@@ -265,16 +267,17 @@ def test_tracked_frames_skip_the_search_and_agree_with_it(dataset, scene):
     track_max_frames tracked frames in a row the next one is searched again."""
     view = 'D5'
     reference = dataset.reference_image(view)
-    tracked = DroneCalibrator(scene, CalibSettings(track_corners=True, track_max_frames=2), dataset.reference_camera(view),
-                             reference)
+    tracked = DroneCalibrator(
+        scene, CalibSettings(track_corners=True, track_max_frames=2), dataset.reference_camera(view), reference
+    )
     searched = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view), reference)
     for index, frame in enumerate(dataset.frames):
         image = dataset.load_image(view, frame)
         a, b = tracked.process(image, 0.5 * index), searched.process(image, 0.5 * index)
         assert a.status == b.status == OK, (frame, a.message, b.message)
         assert a.tracked == (index in (1, 2, 4)) and not b.tracked
-        assert ('detect' in a.timings_s) == (not a.tracked)   # tracked frames ran no search
-        assert a.corners > 0.9 * b.corners   # the rounds of grow verify as many corners as the search finds
+        assert ('detect' in a.timings_s) == (not a.tracked)  # tracked frames ran no search
+        assert a.corners > 0.9 * b.corners  # the rounds of grow verify as many corners as the search finds
         rot, centre = pose_errors(a.camera, b.camera)
         assert rot < 0.05 and centre < 0.03, (frame, rot, centre)
         rot, centre = pose_errors(a.camera, dataset.camera(view, frame))
@@ -285,8 +288,12 @@ def test_hidden_boards_are_not_tracked(dataset, scene):
     """The ground motion still succeeds when the boards are painted over, but no saddle verifies the tracked
     corners: the frame falls back to the search and ends stale, with the last good pose."""
     view = 'D5'
-    cal = DroneCalibrator(scene, CalibSettings(full_search=False, track_corners=True), dataset.reference_camera(view),
-                          dataset.reference_image(view))
+    cal = DroneCalibrator(
+        scene,
+        CalibSettings(full_search=False, track_corners=True),
+        dataset.reference_camera(view),
+        dataset.reference_image(view),
+    )
     assert cal.process(dataset.load_image(view, 0), 0.0).status == OK
     image = dataset.load_image(view, 1)
     truth = scene.camera(dataset.camera(view, 1).cam_T_world)
@@ -305,8 +312,7 @@ def test_an_opencv_error_in_one_frame_leaves_the_calibrator_working(dataset, sce
     import matrix_core.calib.board_search as search_module
 
     view = 'D5'
-    cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view),
-                          dataset.reference_image(view))
+    cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view), dataset.reference_image(view))
     assert cal.process(dataset.load_image(view, 0), 0.0).status == OK
     real_find_pieces = search_module.find_pieces
 
@@ -329,8 +335,9 @@ def test_the_half_resolution_whole_image_search_recovers_drone_7(dataset, scene)
     whole-image search (at full_search_scale 0.5, a third of the full-resolution time) finds the pieces
     that give frame 2 an accurate pose."""
     view = 'D7'
-    cal = DroneCalibrator(scene, CalibSettings(full_search_scale=0.5), dataset.reference_camera(view),
-                          dataset.reference_image(view))
+    cal = DroneCalibrator(
+        scene, CalibSettings(full_search_scale=0.5), dataset.reference_camera(view), dataset.reference_image(view)
+    )
     results = [cal.process(dataset.load_image(view, frame), 0.5 * k) for k, frame in enumerate(dataset.frames[:3])]
     assert all(r.full_search for r in results)
     assert results[2].status == OK, results[2].message

@@ -39,16 +39,35 @@ def test_registration_guides_every_real_view(matrix_sample, registered, tmp_path
     """8 drones x 2 frames, each guided by its registration: all ok and written, median within
     0.1 deg / 3 cm of the stored calibration (measured: 0.015 deg / 0.7 cm over all 40 views)."""
     out = tmp_path / 'calib'
-    assert main(['calibrate', str(matrix_sample), '--out', str(out), '--registration', str(registered),
-                 '--max-frames', '2', '--compare']) == 0
+    assert (
+        main(
+            [
+                'calibrate',
+                str(matrix_sample),
+                '--out',
+                str(out),
+                '--registration',
+                str(registered),
+                '--max-frames',
+                '2',
+                '--compare',
+            ]
+        )
+        == 0
+    )
     printed = capsys.readouterr().out
     assert "16 images: {'ok': 16, 'stale': 0, 'failed': 0}; 0 raised" in printed, printed
     assert '16 guided by their registration' in printed
     rows = _rows(out)
     assert len(rows) == 16 and {r['view'] for r in rows} == {f'D{n}' for n in range(1, 9)}
     for r in rows:
-        assert (r['status'], r['guide'], r['registration'], r['written'], r['failure']) == \
-            ('ok', 'registration', 'ok', 'True', ''), r
+        assert (r['status'], r['guide'], r['registration'], r['written'], r['failure']) == (
+            'ok',
+            'registration',
+            'ok',
+            'True',
+            '',
+        ), r
     # What was written is what the reader reads back, against the stored calibration.
     truth, written = MatrixDataset(matrix_sample), open_dataset(out)
     errors = np.array([pose_errors(written.camera(v, f), truth.camera(v, f)) for v in truth.views for f in (0, 1)])
@@ -74,20 +93,35 @@ def test_stale_poses_are_written_only_when_asked(matrix_sample, registered, tmp_
     _shift_ground(reg / 'registration' / 'Drone5_0001.json', 1.5)
     for flags, written in (([], False), (['--write-stale'], True)):
         out = tmp_path / f'calib{len(flags)}'
-        assert main(['calibrate', str(matrix_sample), '--out', str(out), '--registration', str(reg),
-                     '--views', 'D5', '--max-frames', '2'] + flags) == 0
+        assert (
+            main(
+                [
+                    'calibrate',
+                    str(matrix_sample),
+                    '--out',
+                    str(out),
+                    '--registration',
+                    str(reg),
+                    '--views',
+                    'D5',
+                    '--max-frames',
+                    '2',
+                ]
+                + flags
+            )
+            == 0
+        )
         first, second = _rows(out)
         assert (first['status'], first['registration'], first['written']) == ('ok', 'missing', 'True'), first
         assert first['guide'] != 'registration'
-        assert second['status'] == 'stale' and 'from the camera the registration implies' in second['message'], \
-            second
+        assert second['status'] == 'stale' and 'from the camera the registration implies' in second['message'], second
         assert second['written'] == str(written) and _extrinsic(out, 5, 1).is_file() == written
         assert _extrinsic(out, 5, 0).is_file()
         assert open_dataset(out).frames == ((0, 1) if written else (0,))
     # The stale file holds the last good pose (frame 0's).
     stale = open_dataset(tmp_path / 'calib1')
     rot, centre = pose_errors(stale.camera('D5', 1), stale.camera('D5', 0))
-    assert rot < 1e-4 and centre < 1e-4   # the same pose, to the files' precision
+    assert rot < 1e-4 and centre < 1e-4  # the same pose, to the files' precision
 
 
 def _sample_copy(matrix_sample, root):
@@ -111,14 +145,33 @@ def test_a_bad_frame_fails_alone(matrix_sample, tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "4 images: {'ok': 2, 'stale': 0, 'failed': 2}; 2 raised" in printed, printed
     rows = _rows(out)
-    assert [(r['status'], r['failure']) for r in rows] == \
-        [('ok', ''), ('failed', 'read image'), ('failed', 'calibrate'), ('ok', '')]
+    assert [(r['status'], r['failure']) for r in rows] == [
+        ('ok', ''),
+        ('failed', 'read image'),
+        ('failed', 'calibrate'),
+        ('ok', ''),
+    ]
     assert 'cannot decode image' in rows[1]['message'] and '0001.jpg' in rows[1]['message']
     assert 'intrinsics are for 1920x1080' in rows[2]['message']
     assert [_extrinsic(out, 5, f).is_file() for f in range(4)] == [True, False, False, True]
 
 
 def test_registration_folder_without_records_is_an_error(matrix_sample, tmp_path, capsys):
-    assert main(['calibrate', str(matrix_sample), '--out', str(tmp_path / 'out'), '--registration',
-                 str(tmp_path), '--views', 'D5', '--max-frames', '1']) == 2
+    assert (
+        main(
+            [
+                'calibrate',
+                str(matrix_sample),
+                '--out',
+                str(tmp_path / 'out'),
+                '--registration',
+                str(tmp_path),
+                '--views',
+                'D5',
+                '--max-frames',
+                '1',
+            ]
+        )
+        == 2
+    )
     assert 'no registration records' in capsys.readouterr().err

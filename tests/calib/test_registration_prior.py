@@ -28,11 +28,13 @@ def _drone(dataset, view, settings=None):
     reference = dataset.reference_image(view)
     camera = dataset.reference_camera(view)
     register_settings, _ = settings_for_dataset(RegisterSettings(), dataset)
-    return (DroneCalibrator(load_scene(), settings or CalibSettings(), camera, reference),
-            Registrar(register_settings, reference, camera, dataset.area, f'{view}/reference'))
+    return (
+        DroneCalibrator(load_scene(), settings or CalibSettings(), camera, reference),
+        Registrar(register_settings, reference, camera, dataset.area, f'{view}/reference'),
+    )
 
 
-@pytest.mark.slow   # 40 real 1080p views: 8 s
+@pytest.mark.slow  # 40 real 1080p views: 8 s
 def test_every_real_frame_is_calibrated_from_its_registration(dataset):
     """All 8 drones x 5 frames: ok, no board search, no image-motion features, median within 0.03 deg / 2 cm
     and every frame within 0.15 deg / 7 cm of the stored calibration (searching gets 32 of 40 frames, worst
@@ -61,12 +63,13 @@ def test_every_real_frame_is_calibrated_from_its_registration(dataset):
 def test_an_unusable_registration_falls_back_to_the_image_motion(dataset):
     calibrator, _ = _drone(dataset, 'D5')
     truth = dataset.camera('D5', 0)
-    not_rigid = truth.img_H_ground() @ np.diag([1.0, 1.3, 1.0])   # squashed: no camera with this K
-    for k, (H, why) in enumerate([(np.full((3, 3), np.nan), 'registration homography unusable'),
-                                  (not_rigid, 'registration not a rigid camera')]):
+    not_rigid = truth.img_H_ground() @ np.diag([1.0, 1.3, 1.0])  # squashed: no camera with this K
+    for k, (H, why) in enumerate(
+        [(np.full((3, 3), np.nan), 'registration homography unusable'), (not_rigid, 'registration not a rigid camera')]
+    ):
         r = calibrator.process(dataset.load_image('D5', k), 0.5 * k, Registration.from_img_H_ground(H))
         assert r.status == OK and r.motion.startswith(why) and 'homography (' in r.motion, r.motion
-        assert 'detect' in r.timings_s   # searched where the image motion put the boards
+        assert 'detect' in r.timings_s  # searched where the image motion put the boards
 
 
 def test_a_pose_that_disagrees_with_the_registration_is_rejected(dataset):

@@ -19,8 +19,28 @@ FRAMES = 4
 @pytest.fixture(scope='module')
 def sequence(tmp_path_factory):
     out = tmp_path_factory.mktemp('sim') / 'sim'
-    assert main(['simulate', '--config', 'simple', '--frames', str(FRAMES), '--seed', '1', '--width', '160',
-                 '--height', '90', '--out', str(out), '--bag', 'true']) == 0
+    assert (
+        main(
+            [
+                'simulate',
+                '--config',
+                'simple',
+                '--frames',
+                str(FRAMES),
+                '--seed',
+                '1',
+                '--width',
+                '160',
+                '--height',
+                '90',
+                '--out',
+                str(out),
+                '--bag',
+                'true',
+            ]
+        )
+        == 0
+    )
     return out
 
 
@@ -61,7 +81,7 @@ def _check_frames(got, sequence):
 
 
 def test_a_bag_cut_short_gives_its_frames_before_the_cut(sequence, tmp_path):
-    bag = damaged(sequence, tmp_path, lambda b: b[:[at for op, at in record_offsets(b) if op == 0x06][1] + 5000])
+    bag = damaged(sequence, tmp_path, lambda b: b[: [at for op, at in record_offsets(b) if op == 0x06][1] + 5000])
     got, message = frames_then_error(bag)
     assert 1 <= len(got) < FRAMES, len(got)
     _check_frames(got, sequence)
@@ -70,8 +90,9 @@ def test_a_bag_cut_short_gives_its_frames_before_the_cut(sequence, tmp_path):
 
 def test_overwritten_records_in_the_middle(sequence, tmp_path):
     def overwrite_middle_chunk(b):
-        at = [at for op, at in record_offsets(b) if op == 0x06][1] + 49   # the chunk's first message record
-        return b[:at] + b'\xff' * 9 + b[at + 9:]       # its opcode and length: garbage
+        at = [at for op, at in record_offsets(b) if op == 0x06][1] + 49  # the chunk's first message record
+        return b[:at] + b'\xff' * 9 + b[at + 9 :]  # its opcode and length: garbage
+
     bag = damaged(sequence, tmp_path, overwrite_middle_chunk)
     got, message = frames_then_error(bag)
     assert 1 <= len(got) < FRAMES
@@ -89,7 +110,7 @@ def test_not_an_mcap_file_and_no_bag_at_all(sequence, tmp_path):
 
 def test_an_unfinished_bag_without_metadata_is_read_from_its_records(sequence, tmp_path):
     """What a killed writer leaves: no metadata.yaml, no summary; every chunk it had written is read."""
-    bag = damaged(sequence, tmp_path, lambda b: b[:[at for op, at in record_offsets(b) if op == 0x06][-1]])
+    bag = damaged(sequence, tmp_path, lambda b: b[: [at for op, at in record_offsets(b) if op == 0x06][-1]])
     (bag / 'metadata.yaml').unlink()
     got, message = frames_then_error(bag)
     assert len(got) >= 1
@@ -98,7 +119,7 @@ def test_an_unfinished_bag_without_metadata_is_read_from_its_records(sequence, t
 
 
 def test_matrix_tracker_bag_lists_what_a_damaged_bag_holds(sequence, tmp_path, capsys):
-    bag = damaged(sequence, tmp_path, lambda b: b[:[at for op, at in record_offsets(b) if op == 0x06][1] + 5000])
+    bag = damaged(sequence, tmp_path, lambda b: b[: [at for op, at in record_offsets(b) if op == 0x06][1] + 5000])
     assert main(['bag', str(bag)]) == 1
     out, err = capsys.readouterr()
     assert '/D1/image_raw' in out and 'sensor_msgs/msg/Image' in out

@@ -15,8 +15,13 @@ MANIFEST = ROOT / 'scripts' / 'matrix_sample.sha256'
 
 
 def run_data(shared: Path, *args, **env) -> subprocess.CompletedProcess:
-    return subprocess.run(['bash', str(DATA_SH), *args], capture_output=True, text=True, timeout=120,
-                          env={**os.environ, 'MATRIX_SHARED': str(shared), **env})
+    return subprocess.run(
+        ['bash', str(DATA_SH), *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, 'MATRIX_SHARED': str(shared), **env},
+    )
 
 
 def test_the_real_shared_folder_passes(shared_dir):
@@ -52,8 +57,11 @@ def test_the_default_repository_attempt_is_bounded(tmp_path):
 def _copy_of_a_few_files(matrix_sample: Path, to: Path) -> list:
     """A copy of the manifest's entries under annotations_positions/ and calibrations/intrinsic/, and a
     manifest of just those; returns their relative paths."""
-    lines = [line for line in MANIFEST.read_text().splitlines()
-             if line.split()[2].startswith(('annotations_positions/', 'calibrations/intrinsic/intr_Drone1_'))]
+    lines = [
+        line
+        for line in MANIFEST.read_text().splitlines()
+        if line.split()[2].startswith(('annotations_positions/', 'calibrations/intrinsic/intr_Drone1_'))
+    ]
     rels = [line.split()[2] for line in lines]
     for rel in rels:
         (to / rel).parent.mkdir(parents=True, exist_ok=True)
@@ -63,8 +71,12 @@ def _copy_of_a_few_files(matrix_sample: Path, to: Path) -> list:
 
 
 def check(folder: Path, manifest: Path, *extra) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, str(MANIFEST_PY), 'check', str(folder), str(manifest), *extra],
-                          capture_output=True, text=True, timeout=60)
+    return subprocess.run(
+        [sys.executable, str(MANIFEST_PY), 'check', str(folder), str(manifest), *extra],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
 
 
 def test_the_manifest_detects_a_modified_or_missing_file(matrix_sample, tmp_path):
@@ -87,6 +99,6 @@ def test_the_manifest_covers_the_whole_sample_and_its_matchings_folders():
         digest, kind, rel = line.split(None, 2)
         assert len(digest) == 64
         kinds.setdefault(kind, []).append(rel)
-    assert len(kinds['image']) == 48 and all(r.endswith('.jpg') for r in kinds['image'])   # 40 + 8 reference
+    assert len(kinds['image']) == 48 and all(r.endswith('.jpg') for r in kinds['image'])  # 40 + 8 reference
     assert sorted(kinds['tree']) == ['matchings/Pedestrians', 'matchings/Pedestrians/LoS', 'matchings/Planes']
     assert kinds['local'] == ['README.md']

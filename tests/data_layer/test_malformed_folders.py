@@ -25,14 +25,17 @@ def _replace(path, text):
     path.write_text(text)
 
 
-@pytest.mark.parametrize('content', ['', '<?xml version="1.0"?>\n<opencv_storage>\n<rvec type_id="opencv-matrix"><rows>3'],
-                         ids=['empty', 'truncated'])
+@pytest.mark.parametrize(
+    'content',
+    ['', '<?xml version="1.0"?>\n<opencv_storage>\n<rvec type_id="opencv-matrix"><rows>3'],
+    ids=['empty', 'truncated'],
+)
 def test_bad_calibration_xml(sample, content):
     _replace(sample / 'calibrations/extrinsic/extr_Drone3_0001.xml', content)
     ds = open_dataset(sample)
     with pytest.raises(DatasetError, match=r'cannot parse calibration file .*extr_Drone3_0001\.xml'):
         ds.camera('D3', 1)
-    assert ds.camera('D3', 2) is not None    # the other files still read
+    assert ds.camera('D3', 2) is not None  # the other files still read
 
 
 def test_nan_in_a_calibration_file(sample):
@@ -54,15 +57,19 @@ def test_bad_annotation_and_meta_json(sample):
     (sample / 'matrix_tracker_meta.json').write_text('{"area_file_xy": [0, ')
     with pytest.raises(DatasetError, match=r'malformed .*matrix_tracker_meta\.json'):
         open_dataset(sample)
-    run = subprocess.run([sys.executable, '-m', 'matrix_core.cli.main', 'info', str(sample)], capture_output=True,
-                         text=True, timeout=120)
+    run = subprocess.run(
+        [sys.executable, '-m', 'matrix_core.cli.main', 'info', str(sample)], capture_output=True, text=True, timeout=120
+    )
     assert run.returncode == 2 and 'matrix_tracker_meta.json' in run.stderr and 'Traceback' not in run.stderr
 
 
 def test_wrong_numbering_is_named(sample):
     os.rename(sample / 'image_subsets/D3/0002.jpg', sample / 'image_subsets/D3/2.jpg')
-    with pytest.raises(DatasetError, match=r'image_subsets/D3: image files must be named by their frame as TTTT.*'
-                                           r'misnamed: 2\.jpg'):
+    with pytest.raises(
+        DatasetError,
+        match=r'image_subsets/D3: image files must be named by their frame as TTTT.*'
+        r'misnamed: 2\.jpg',
+    ):
         open_dataset(sample).frames
 
 
@@ -72,6 +79,6 @@ def test_missing_files_leave_the_frame_out_and_say_why(sample):
     ds = open_dataset(sample)
     assert ds.frames == (0, 2, 4)
     assert ds.incomplete_frames == {1: 'no D4 image', 3: 'no D7 calibration'}
-    (sample / 'calibrations/extrinsic/extr_Drone2_0000.xml').unlink()     # intrinsic there, extrinsic not
+    (sample / 'calibrations/extrinsic/extr_Drone2_0000.xml').unlink()  # intrinsic there, extrinsic not
     with pytest.raises(DatasetError, match=r'calibration file not found: .*extr_Drone2_0000\.xml'):
         ds.camera('D2', 0)

@@ -14,9 +14,15 @@ def _copy_sample(src: MatrixDataset, dst, frames=(0, 1)):
         for view in src.views:
             writer.write_image(view, frame, src.load_image(view, frame))
             writer.write_camera(view, frame, src.camera(view, frame))
-            writer.write_line_of_sight(view, frame, {
-                pid: xyz for pid, xyz in src.pedestrian_positions(frame).items()
-                if pid in src.line_of_sight(view, frame)})
+            writer.write_line_of_sight(
+                view,
+                frame,
+                {
+                    pid: xyz
+                    for pid, xyz in src.pedestrian_positions(frame).items()
+                    if pid in src.line_of_sight(view, frame)
+                },
+            )
         writer.write_annotations(frame, src.annotations(frame), src.views)
         writer.write_pedestrians(frame, src.pedestrian_positions(frame))
     for view in src.views:
@@ -44,8 +50,9 @@ def test_calibrations_identical(pair):
             np.testing.assert_allclose(b.cam_T_world, a.cam_T_world, rtol=0, atol=1e-12)
             np.testing.assert_allclose(b.dist, a.dist, rtol=0, atol=1e-15)
     for view in src.views:
-        np.testing.assert_allclose(dst.reference_camera(view).cam_T_world,
-                                   src.reference_camera(view).cam_T_world, atol=1e-12)
+        np.testing.assert_allclose(
+            dst.reference_camera(view).cam_T_world, src.reference_camera(view).cam_T_world, atol=1e-12
+        )
 
 
 def test_annotation_files_byte_for_byte_equivalent(pair, matrix_sample):

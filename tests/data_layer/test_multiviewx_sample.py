@@ -24,7 +24,7 @@ def test_annotated_positions_project_onto_the_annotated_feet(sample):
     ds = open_dataset(sample)
     assert isinstance(ds, MultiviewXDataset)
     assert ds.views == ('C1', 'C2', 'C3', 'C4', 'C5', 'C6') and ds.annotated_frames == tuple(range(1, 11))
-    agreement = foot_point_agreement(sample)   # the measurement the experiments' Table III step reports
+    agreement = foot_point_agreement(sample)  # the measurement the experiments' Table III step reports
     assert agreement['format'] == 'MultiviewXDataset' and set(agreement['views']) == set(ds.views)
     for view, a in agreement['views'].items():
         assert a['n'] > 150 and a['median_px'] <= 8.0, f'{view}: median {a["median_px"]:.1f} px'
@@ -39,11 +39,17 @@ def test_reader_cameras_reproduce_raw_opencv_with_positive_depth(sample):
         persons = [p for p in ds.annotations(1) if view in p.boxes]
         pos = np.array([p.position_id for p in persons])
         file_world = np.c_[pos % 1000, pos // 1000, np.zeros(len(pos))] / 40.0
-        intr = read_matrices(sample / f'calibrations/intrinsic/intr_Camera{i}.xml',
-                             ['camera_matrix', 'distortion_coefficients'])
+        intr = read_matrices(
+            sample / f'calibrations/intrinsic/intr_Camera{i}.xml', ['camera_matrix', 'distortion_coefficients']
+        )
         extr = read_matrices(sample / f'calibrations/extrinsic/extr_Camera{i}.xml', ['rvec', 'tvec'])
-        raw = cv2.projectPoints(file_world.reshape(-1, 1, 3), extr['rvec'], extr['tvec'], intr['camera_matrix'],
-                                intr['distortion_coefficients'])[0].reshape(-1, 2)
+        raw = cv2.projectPoints(
+            file_world.reshape(-1, 1, 3),
+            extr['rvec'],
+            extr['tvec'],
+            intr['camera_matrix'],
+            intr['distortion_coefficients'],
+        )[0].reshape(-1, 2)
         cam = ds.camera(view, 0)
         world = np.c_[[p.world_xy for p in persons], np.zeros(len(persons))]
         assert len(persons) > 10 and np.all(cam.depth(world) > 0)  # everyone it sees is in front of it

@@ -45,8 +45,12 @@ def _write_bag(path, clock=None, frames=3):
     camera = Camera(np.array([[10.0, 0, 4], [0, 10.0, 4], [0, 0, 1]]), pose_matrix(np.eye(3), [0, 0, 5.0]), 8, 8)
     with SequenceBagWriter(path, ['D1'], clock=clock) as bag:
         for i in range(frames):
-            bag.write_frame(i, {'D1': np.zeros((8, 8, 3), np.uint8)}, {'D1': camera},
-                            {7: np.array([1.0 + i, -2.0, 0.0]), 9: np.array([5.0, -6.0 - i, 0.0])})
+            bag.write_frame(
+                i,
+                {'D1': np.zeros((8, 8, 3), np.uint8)},
+                {'D1': camera},
+                {7: np.array([1.0 + i, -2.0, 0.0]), 9: np.array([5.0, -6.0 - i, 0.0])},
+            )
     return path
 
 
@@ -57,7 +61,7 @@ def test_writer_stores_the_clock_and_stamps_with_it(tmp_path):
     assert read_sequence_clock(bag) == CLOCK
     stamps = [stamp_ns(m.msg.header) for m in read_bag(bag, [t.PEDESTRIANS_TOPIC])]
     assert stamps == [CLOCK.stamp_ns(i) for i in range(3)]
-    gt = ground_truth_from_bag(bag)   # frames by the stored clock, no timing given
+    gt = ground_truth_from_bag(bag)  # frames by the stored clock, no timing given
     assert sorted(set(gt.frames.tolist())) == [0, 1, 2] and len(gt) == 6
 
 
@@ -68,7 +72,7 @@ def test_default_clock_is_stored_too(tmp_path):
 def test_bag_without_a_clock_gets_the_default_with_a_note(tmp_path, caplog):
     bag = _write_bag(tmp_path / 'old', CLOCK)
     meta = yaml.safe_load((bag / 'metadata.yaml').read_text())
-    del meta['rosbag2_bagfile_information']['custom_data']   # as written before the clock was stored
+    del meta['rosbag2_bagfile_information']['custom_data']  # as written before the clock was stored
     (bag / 'metadata.yaml').write_text(yaml.safe_dump(meta))
     assert stored_sequence_clock(bag) is None
     with caplog.at_level(logging.WARNING, logger='matrix_core.bags.clock'):
@@ -84,12 +88,28 @@ def test_evaluate_recording_takes_the_clock_from_the_sequence_bag(tmp_path):
     bag = _write_bag(tmp_path / 'bag', CLOCK)
     write_bev_points(tmp_path / 'tracks.txt', ground_truth_from_bag(bag))
     out = tmp_path / 'm.json'
-    assert cli(['evaluate-recording', str(tmp_path / 'tracks.txt'), '--ground-truth', str(bag),
-                '--json', str(out)]) == 0
+    assert (
+        cli(['evaluate-recording', str(tmp_path / 'tracks.txt'), '--ground-truth', str(bag), '--json', str(out)]) == 0
+    )
     assert json.loads(out.read_text())['tracking']['mota'] == 1.0
     # an override shifts the ground truth by one frame: nothing matches any more
-    assert cli(['evaluate-recording', str(tmp_path / 'tracks.txt'), '--ground-truth', str(bag),
-                '--start-time', '1.75', '--json', str(out)]) == 0
+    assert (
+        cli(
+            [
+                'evaluate-recording',
+                str(tmp_path / 'tracks.txt'),
+                '--ground-truth',
+                str(bag),
+                '--start-time',
+                '1.75',
+                '--json',
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert json.loads(out.read_text())['detection']['recall'] == 0.0
-    assert cli(['evaluate-recording', str(tmp_path / 'tracks.txt'), '--ground-truth', str(bag),
-                '--frame-period', '0']) == 2
+    assert (
+        cli(['evaluate-recording', str(tmp_path / 'tracks.txt'), '--ground-truth', str(bag), '--frame-period', '0'])
+        == 2
+    )

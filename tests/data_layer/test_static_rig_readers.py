@@ -42,16 +42,20 @@ def _write_rig(root, fmt_cls, eyes, target, unit, text_extrinsics, frame_ids, pe
     fmt = fmt_cls.FORMAT
     cams = [Camera(K, _look_at(np.array(e), target), 1920, 1080) for e in eyes]
     for i, (cam, stem) in enumerate(zip(cams, fmt.camera_files)):
-        write_matrices(root / 'calibrations' / fmt.intrinsic_dir / f'intr_{stem}.xml',
-                       {'camera_matrix': K, 'distortion_coefficients': np.zeros((1, 5))})
+        write_matrices(
+            root / 'calibrations' / fmt.intrinsic_dir / f'intr_{stem}.xml',
+            {'camera_matrix': K, 'distortion_coefficients': np.zeros((1, 5))},
+        )
         extr = root / 'calibrations' / 'extrinsic' / f'extr_{stem}.xml'
         rvec, tvec = _file_extrinsics(cam, fmt)
         assert fmt.metres_per_unit == unit
         if text_extrinsics:  # Wildtrack writes rvec/tvec as plain text nodes
             extr.parent.mkdir(parents=True, exist_ok=True)
-            extr.write_text('<?xml version="1.0"?>\n<opencv_storage>\n'
-                            f'<rvec>{" ".join(repr(float(v)) for v in rvec)}</rvec>\n'
-                            f'<tvec>{" ".join(repr(float(v)) for v in tvec)}</tvec>\n</opencv_storage>\n')
+            extr.write_text(
+                '<?xml version="1.0"?>\n<opencv_storage>\n'
+                f'<rvec>{" ".join(repr(float(v)) for v in rvec)}</rvec>\n'
+                f'<tvec>{" ".join(repr(float(v)) for v in tvec)}</tvec>\n</opencv_storage>\n'
+            )
         else:
             write_matrices(extr, {'rvec': rvec.reshape(3, 1), 'tvec': tvec.reshape(3, 1)})
         for f in frame_ids:
@@ -69,18 +73,24 @@ def _write_rig(root, fmt_cls, eyes, target, unit, text_extrinsics, frame_ids, pe
     ann.mkdir()
     for f in frame_ids:
         (ann / f'{f:0{fmt.annotation_digits}d}.json').write_text(
-            json.dumps([{'personID': 7, 'positionID': pid, 'views': views}]))
+            json.dumps([{'personID': 7, 'positionID': pid, 'views': views}])
+        )
     return cams, pid
 
 
-@pytest.mark.parametrize('fmt_cls, unit, text, target, person', [
-    (WildtrackDataset, 0.01, True, (3.0, 9.0, 0.0), (2.0, 10.0)),
-    (MultiviewXDataset, 1.0, False, (12.5, -8.0, 0.0), (12.0, -7.5)),  # internal y = -file y
-])
+@pytest.mark.parametrize(
+    'fmt_cls, unit, text, target, person',
+    [
+        (WildtrackDataset, 0.01, True, (3.0, 9.0, 0.0), (2.0, 10.0)),
+        (MultiviewXDataset, 1.0, False, (12.5, -8.0, 0.0), (12.0, -7.5)),  # internal y = -file y
+    ],
+)
 def test_reader_roundtrip(tmp_path, fmt_cls, unit, text, target, person):
     n = len(fmt_cls.FORMAT.camera_files)
-    eyes = [(target[0] + 12 * np.cos(a), target[1] + 12 * np.sin(a), 6.0)
-            for a in np.linspace(0, 2 * np.pi, n, endpoint=False)]
+    eyes = [
+        (target[0] + 12 * np.cos(a), target[1] + 12 * np.sin(a), 6.0)
+        for a in np.linspace(0, 2 * np.pi, n, endpoint=False)
+    ]
     cams, pid = _write_rig(tmp_path, fmt_cls, eyes, target, unit, text, [0, 5], person)
     ds = open_dataset(tmp_path)
     assert type(ds) is fmt_cls
@@ -156,13 +166,16 @@ def test_wildtrack_reader_matches_a_folder_written_from_the_published_convention
         eye = centre_cm + [900 * np.cos(a), 2000 * np.sin(a), 600.0]
         cam_T_world = _look_at(eye, centre_cm)
         rvec, tvec = cv2.Rodrigues(cam_T_world[:3, :3])[0].reshape(3), cam_T_world[:3, 3]
-        write_matrices(tmp_path / 'calibrations' / 'intrinsic_zero' / f'intr_{stem}.xml',
-                       {'camera_matrix': K, 'distortion_coefficients': np.zeros((1, 5))})
+        write_matrices(
+            tmp_path / 'calibrations' / 'intrinsic_zero' / f'intr_{stem}.xml',
+            {'camera_matrix': K, 'distortion_coefficients': np.zeros((1, 5))},
+        )
         (tmp_path / 'calibrations' / 'extrinsic' / f'extr_{stem}.xml').parent.mkdir(parents=True, exist_ok=True)
         (tmp_path / 'calibrations' / 'extrinsic' / f'extr_{stem}.xml').write_text(
             '<?xml version="1.0"?>\n<opencv_storage>\n'
             f'<rvec>{" ".join(f"{v:.12e}" for v in rvec)}</rvec>\n'
-            f'<tvec>{" ".join(f"{v:.12e}" for v in tvec)}</tvec>\n</opencv_storage>\n')
+            f'<tvec>{" ".join(f"{v:.12e}" for v in tvec)}</tvec>\n</opencv_storage>\n'
+        )
         (tmp_path / 'Image_subsets' / f'C{i + 1}').mkdir(parents=True)
         cv2.imwrite(str(tmp_path / 'Image_subsets' / f'C{i + 1}' / '00000000.png'), np.zeros((1080, 1920, 3), np.uint8))
         uv = cv2.projectPoints(feet_cm.reshape(-1, 1, 3), rvec, tvec, K, np.zeros(5))[0].reshape(-1, 2)

@@ -27,7 +27,7 @@ def test_each_drone_host_runs_its_own_camera_register_and_calib(settings):
         # the camera of this drone only, compressed, on the recorded timing (a camera does not wait)
         assert player.parameters['topics'] == [f'/{v}/image/compressed', f'/{v}/ground_truth/camera_info']
         assert player.parameters['lockstep'] is False and 'lockstep_topic' not in player.parameters
-        assert player.parameters['wait_for_subscribers'] == 2   # drone and link_sender, both here
+        assert player.parameters['wait_for_subscribers'] == 2  # drone and link_sender, both here
     separate = deployment(settings(record='/out/rec', monitor=True, drone_process=False), FACTS)
     assert [n.label for n in separate.hosts['D2']] == ['D2/calib', 'D2/register', 'D2/link_sender', 'D2/bag_player']
     assert separate.hosts['D2'][-1].parameters['wait_for_subscribers'] == 3
@@ -49,11 +49,18 @@ def test_what_crosses_each_link_and_its_qos(settings):
     d = deployment(settings(record='/out/rec', monitor=True), FACTS)
     assert list(d.links) == VIEWS
     link = {st.topic: st for st in d.links['D2']}
-    assert set(link) == {'D2/link/image/compressed', 'D2/link/dropped', 'D2/homography', 'D2/camera_info', 'D2/pose',
-                         'D2/ground_truth/camera_info', '/diagnostics'}
-    assert all(st.direction == UP for st in link.values())   # the ground sends nothing back but acks
+    assert set(link) == {
+        'D2/link/image/compressed',
+        'D2/link/dropped',
+        'D2/homography',
+        'D2/camera_info',
+        'D2/pose',
+        'D2/ground_truth/camera_info',
+        '/diagnostics',
+    }
+    assert all(st.direction == UP for st in link.values())  # the ground sends nothing back but acks
     assert not any(st.direction == DOWN for streams in d.links.values() for st in streams)
-    image = link['D2/link/image/compressed']   # link_sender's, not the camera's stream
+    image = link['D2/link/image/compressed']  # link_sender's, not the camera's stream
     assert image.readers == ('fuse',) and 'dropped whole at the sender' in image.why
     assert link['D2/homography'].reliability == 'reliable'
     assert set(link['D2/homography'].readers) == {'fuse', 'recorder', 'graph_monitor'}

@@ -12,17 +12,24 @@ from matrix_bringup.distributed import SERVER_PORT, host_env, read_probe
 from matrix_bringup.netns_harness import GROUND, Hosts, unavailable
 
 REASON = unavailable()
-pytestmark = [pytest.mark.ros, pytest.mark.slow,
-              pytest.mark.skipif(bool(REASON), reason=f'no network namespaces here: {REASON}')]
+pytestmark = [
+    pytest.mark.ros,
+    pytest.mark.slow,
+    pytest.mark.skipif(bool(REASON), reason=f'no network namespaces here: {REASON}'),
+]
 
-TALK = ('import sys, time, rclpy\nfrom std_msgs.msg import String\nrclpy.init()\nn = rclpy.create_node("talker")\n'
-        'p = n.create_publisher(String, "/D1/chat", 10)\nfor i in range(int(sys.argv[1])):\n'
-        '    p.publish(String(data="x" * 2000))\n    time.sleep(0.2)\n')
-LISTEN = ('import sys, time, json, rclpy\nfrom std_msgs.msg import String\nrclpy.init()\n'
-          'n = rclpy.create_node("listener")\ngot = []\n'
-          'n.create_subscription(String, "/D1/chat", lambda m: got.append(len(m.data)), 10)\n'
-          'end = time.time() + float(sys.argv[1])\nwhile time.time() < end:\n    rclpy.spin_once(n, timeout_sec=0.1)\n'
-          'print(json.dumps({"got": len(got)}), flush=True)\n')
+TALK = (
+    'import sys, time, rclpy\nfrom std_msgs.msg import String\nrclpy.init()\nn = rclpy.create_node("talker")\n'
+    'p = n.create_publisher(String, "/D1/chat", 10)\nfor i in range(int(sys.argv[1])):\n'
+    '    p.publish(String(data="x" * 2000))\n    time.sleep(0.2)\n'
+)
+LISTEN = (
+    'import sys, time, json, rclpy\nfrom std_msgs.msg import String\nrclpy.init()\n'
+    'n = rclpy.create_node("listener")\ngot = []\n'
+    'n.create_subscription(String, "/D1/chat", lambda m: got.append(len(m.data)), 10)\n'
+    'end = time.time() + float(sys.argv[1])\nwhile time.time() < end:\n    rclpy.spin_once(n, timeout_sec=0.1)\n'
+    'print(json.dumps({"got": len(got)}), flush=True)\n'
+)
 
 
 def test_server_from_environment_and_streams_captured(tmp_path):
@@ -30,11 +37,17 @@ def test_server_from_environment_and_streams_captured(tmp_path):
     assert env['ROS_DISCOVERY_SERVER'].endswith(f':{SERVER_PORT}')
     with Hosts(['D1', 'D2'], multicast=False) as hosts:
         names = [f'{h}={hosts.address(h)}' for h in hosts.hosts]
-        capture = hosts.start('D1', [sys.executable, '-m', 'matrix_bringup.link_capture', '--hosts', *names],
-                              tmp_path / 'capture.log', env)
+        capture = hosts.start(
+            'D1',
+            [sys.executable, '-m', 'matrix_bringup.link_capture', '--hosts', *names],
+            tmp_path / 'capture.log',
+            env,
+        )
         hosts.start(GROUND, [sys.executable, '-m', 'matrix_bringup.discovery_server'], tmp_path / 'server.log', env)
-        listeners = {h: hosts.start(h, [sys.executable, '-c', LISTEN, '20'], tmp_path / f'listen_{h}.log', env)
-                     for h in (GROUND, 'D2')}
+        listeners = {
+            h: hosts.start(h, [sys.executable, '-c', LISTEN, '20'], tmp_path / f'listen_{h}.log', env)
+            for h in (GROUND, 'D2')
+        }
         talker = hosts.start('D1', [sys.executable, '-c', TALK, '60'], tmp_path / 'talk.log', env)
         assert talker.wait(60) == 0, (tmp_path / 'talk.log').read_text()
         for h, p in listeners.items():
@@ -42,14 +55,14 @@ def test_server_from_environment_and_streams_captured(tmp_path):
         ports = {h: hosts.udp_ports(h) for h in hosts.hosts}
         hosts.stop(capture)
     got = {h: json.loads((tmp_path / f'listen_{h}.log').read_text().splitlines()[-1])['got'] for h in listeners}
-    assert all(n >= 30 for n in got.values()), got   # both found the talker through the server
+    assert all(n >= 30 for n in got.values()), got  # both found the talker through the server
     domain = int(os.environ.get('ROS_DOMAIN_ID', '0'))
     assert SERVER_PORT in ports[GROUND] and not any(7400 + 250 * domain in p for p in ports.values()), ports
 
     streams = read_probe(tmp_path / 'capture.log')[-1]['streams']
     by = {(r['direction'], r['peer'], r['stream'], r['kind']): r for r in streams}
-    for peer in (GROUND, 'D2'):   # ~2 kB a message: every message a reader got crossed D1's link to it
+    for peer in (GROUND, 'D2'):  # ~2 kB a message: every message a reader got crossed D1's link to it
         assert by[('up', peer, '/D1/chat', 'data')]['bytes'] > got[peer] * 2000, (got, streams)
-        assert by[('down', peer, '/D1/chat', 'acknowledgements')]['frames'] > 10, streams   # reliable readers
-    assert ('down', GROUND, 'discovery: endpoints (SEDP)', '') in by, streams   # from the server
+        assert by[('down', peer, '/D1/chat', 'acknowledgements')]['frames'] > 10, streams  # reliable readers
+    assert ('down', GROUND, 'discovery: endpoints (SEDP)', '') in by, streams  # from the server
     assert not [r for r in streams if r['peer'] == 'multicast' and r['stream'].startswith('discovery')], streams

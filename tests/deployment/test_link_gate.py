@@ -5,15 +5,15 @@ import pytest
 
 from matrix_core.link_gate import DROPPED, SENT, WIRE_OVERHEAD, LinkGate
 
-FRAME = 745_000   # bytes: a 1080p JPEG of the real sample
+FRAME = 745_000  # bytes: a 1080p JPEG of the real sample
 
 
 def test_a_frame_occupies_the_link_for_its_bytes_at_the_link_rate():
     gate = LinkGate(link_mbit=4.0)
-    assert gate.transfer_s(FRAME) == pytest.approx(FRAME * WIRE_OVERHEAD * 8 / 4e6)   # 1.54 s
+    assert gate.transfer_s(FRAME) == pytest.approx(FRAME * WIRE_OVERHEAD * 8 / 4e6)  # 1.54 s
     assert gate.offer(10.0, FRAME) == SENT and gate.busy_s(10.0) == pytest.approx(1.542, abs=1e-3)
-    assert gate.offer(11.0, FRAME) == DROPPED      # the first one still on its way
-    assert gate.offer(11.55, 1000) == SENT         # free again
+    assert gate.offer(11.0, FRAME) == DROPPED  # the first one still on its way
+    assert gate.offer(11.55, 1000) == SENT  # free again
     assert gate.busy_s(11.55) == pytest.approx(1000 * WIRE_OVERHEAD * 8 / 4e6)
     assert (gate.counts.sent, gate.counts.dropped, gate.counts.sent_bytes) == (2, 1, FRAME + 1000)
 

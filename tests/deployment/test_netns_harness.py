@@ -14,17 +14,21 @@ from matrix_bringup.netns_harness import GROUND, Hosts, namespaces, remove_stale
 REASON = unavailable()
 pytestmark = [pytest.mark.slow, pytest.mark.skipif(bool(REASON), reason=f'no network namespaces here: {REASON}')]
 
-RECEIVE = ('import socket, sys; s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM); s.bind(("", 47001)); '
-           's.settimeout(float(sys.argv[1])); print(s.recv(100).decode(), flush=True)')
-SEND = ('import socket, sys, time\nfor _ in range(20):\n    socket.socket(socket.AF_INET, socket.SOCK_DGRAM)'
-        '.sendto(b"hello", (sys.argv[1], 47001)); time.sleep(0.05)')
+RECEIVE = (
+    'import socket, sys; s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM); s.bind(("", 47001)); '
+    's.settimeout(float(sys.argv[1])); print(s.recv(100).decode(), flush=True)'
+)
+SEND = (
+    'import socket, sys, time\nfor _ in range(20):\n    socket.socket(socket.AF_INET, socket.SOCK_DGRAM)'
+    '.sendto(b"hello", (sys.argv[1], 47001)); time.sleep(0.05)'
+)
 
 
 def _reaches(hosts: Hosts, src: str, dst: str, tmp_path: Path) -> bool:
     """A UDP datagram from host ``src`` arrives at host ``dst`` (within 1.5 s)."""
     log = tmp_path / f'recv_{src}_{dst}_{time.monotonic_ns()}.log'
     receiver = hosts.start(dst, [sys.executable, '-c', RECEIVE, '1.5'], log)
-    time.sleep(0.3)   # the receiver binds its port (what is tested is the link, not this start)
+    time.sleep(0.3)  # the receiver binds its port (what is tested is the link, not this start)
     hosts.start(src, [sys.executable, '-c', SEND, hosts.address(dst)], tmp_path / 'send.log').wait(10)
     receiver.wait(10)
     return 'hello' in log.read_text()
@@ -32,11 +36,13 @@ def _reaches(hosts: Hosts, src: str, dst: str, tmp_path: Path) -> bool:
 
 def _alive(pids) -> list:
     """Those of ``pids`` still running (a zombie counts as gone)."""
+
     def running(pid):
         try:
             return Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()[0] != 'Z'
         except OSError:
             return False
+
     return [p for p in pids if running(p)]
 
 
@@ -45,8 +51,11 @@ def _in_namespaces(hosts: Hosts, at_least: int = 0) -> list:
     process just started may not have entered its namespace yet: ``ip netns exec`` joins it, then execs)."""
     deadline = time.monotonic() + 10
     while True:
-        pids = [int(p) for h in hosts.hosts for p in subprocess.run(['ip', 'netns', 'pids', hosts.ns(h)],
-                                                                      capture_output=True, text=True).stdout.split()]
+        pids = [
+            int(p)
+            for h in hosts.hosts
+            for p in subprocess.run(['ip', 'netns', 'pids', hosts.ns(h)], capture_output=True, text=True).stdout.split()
+        ]
         if len(pids) >= at_least or time.monotonic() > deadline:
             return pids
         time.sleep(0.05)
@@ -57,14 +66,17 @@ def test_links_cut_restore_limit_and_nothing_left(tmp_path):
         assert sorted(namespaces(owner_pid=None)) >= sorted(hosts.ns(h) for h in hosts.hosts)
         sleeper = hosts.start('D1', ['sleep', '600'], tmp_path / 'sleep.log')
         assert _reaches(hosts, 'D1', GROUND, tmp_path) and _reaches(hosts, GROUND, 'D2', tmp_path)
-        assert _reaches(hosts, 'D1', 'D2', tmp_path)   # drones see each other through the ground's bridge
+        assert _reaches(hosts, 'D1', 'D2', tmp_path)  # drones see each other through the ground's bridge
         hosts.cut('D1')
         assert not _reaches(hosts, 'D1', GROUND, tmp_path) and not _reaches(hosts, GROUND, 'D1', tmp_path)
-        assert _reaches(hosts, 'D2', GROUND, tmp_path)   # the other drone's link is untouched
+        assert _reaches(hosts, 'D2', GROUND, tmp_path)  # the other drone's link is untouched
         hosts.restore('D1')
         assert _reaches(hosts, 'D1', GROUND, tmp_path)
-        qdisc = subprocess.run(['ip', 'netns', 'exec', hosts.ns('D2'), 'tc', 'qdisc', 'show', 'dev', 'eth0'],
-                               capture_output=True, text=True).stdout
+        qdisc = subprocess.run(
+            ['ip', 'netns', 'exec', hosts.ns('D2'), 'tc', 'qdisc', 'show', 'dev', 'eth0'],
+            capture_output=True,
+            text=True,
+        ).stdout
         assert 'tbf' in qdisc and '20Mbit' in qdisc, qdisc
         stats = hosts.link_bytes('D1')
         assert stats['up'][0] > 0 and stats['down'][0] > 0 and stats['dropped'] == 0
@@ -79,9 +91,11 @@ def hosts_pid(tag: str) -> int:
 
 
 # A process that makes hosts, starts a sleeper in one and waits (to be stopped by the test).
-OWNER = ('import sys, time; from matrix_bringup.netns_harness import Hosts\n'
-         'h = Hosts(["D1"]).__enter__(); p = h.start("D1", ["sleep", "600"], sys.argv[1]); '
-         'print(h.tag, p.pid, flush=True); time.sleep(600)')
+OWNER = (
+    'import sys, time; from matrix_bringup.netns_harness import Hosts\n'
+    'h = Hosts(["D1"]).__enter__(); p = h.start("D1", ["sleep", "600"], sys.argv[1]); '
+    'print(h.tag, p.pid, flush=True); time.sleep(600)'
+)
 
 
 def test_teardown_on_failure_on_sigterm_and_after_the_owner_was_killed(tmp_path):
@@ -101,8 +115,7 @@ def test_teardown_on_failure_on_sigterm_and_after_the_owner_was_killed(tmp_path)
 
     # An owner killed with SIGKILL cannot clean up: its processes get SIGTERM (they die with it) and the
     # next Hosts (or remove_stale) deletes its namespaces.
-    owner = subprocess.Popen([sys.executable, '-c', OWNER, str(tmp_path / 'b.log')], stdout=subprocess.PIPE,
-                             text=True)
+    owner = subprocess.Popen([sys.executable, '-c', OWNER, str(tmp_path / 'b.log')], stdout=subprocess.PIPE, text=True)
     tag, sleeper = owner.stdout.readline().split()
     assert sorted(namespaces(owner_pid=owner.pid)) == sorted([f'{tag}-ground', f'{tag}-D1'])
     owner.kill()
@@ -110,6 +123,6 @@ def test_teardown_on_failure_on_sigterm_and_after_the_owner_was_killed(tmp_path)
     deadline = time.monotonic() + 10
     while _alive([int(sleeper)]) and time.monotonic() < deadline:
         time.sleep(0.1)
-    assert _alive([int(sleeper)]) == []   # the sleeper died with its owner (PR_SET_PDEATHSIG)
+    assert _alive([int(sleeper)]) == []  # the sleeper died with its owner (PR_SET_PDEATHSIG)
     assert sorted(remove_stale()) == sorted([f'{tag}-ground', f'{tag}-D1'])
     assert namespaces(owner_pid=owner.pid) == []

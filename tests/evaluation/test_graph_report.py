@@ -4,8 +4,12 @@ import numpy as np
 import pytest
 
 from matrix_core.datasets import MatrixDataset
-from matrix_core.evaluation.graph_report import (ground_homography_error_m, overview_image, score_view_frame,
-                                                 summary_table)
+from matrix_core.evaluation.graph_report import (
+    ground_homography_error_m,
+    overview_image,
+    score_view_frame,
+    summary_table,
+)
 from matrix_core.geometry.camera import Camera, pose_matrix
 
 
@@ -34,8 +38,10 @@ def test_perfect_estimates_score_zero_and_shifts_are_measured(ds):
 
 
 def test_summary_table_and_picture(ds):
-    scores = [score_view_frame(v, 1.0, ds.camera(v, 0), ds.area, ds.camera(v, 0), 'ok', 0.8,
-                               ds.camera(v, 0).ground_H_img()) for v in ds.views[:3]]
+    scores = [
+        score_view_frame(v, 1.0, ds.camera(v, 0), ds.area, ds.camera(v, 0), 'ok', 0.8, ds.camera(v, 0).ground_H_img())
+        for v in ds.views[:3]
+    ]
     scores.append(score_view_frame('D4', 1.0, ds.camera('D4', 0), ds.area))
     table = summary_table(scores, ['D1', 'D2', 'D3', 'D4'])
     assert table.splitlines()[-2].split()[:3] == ['all', '4', '3']

@@ -19,8 +19,27 @@ MSG_DIR = Path(__file__).resolve().parents[2] / 'ros2_ws/src/matrix_msgs/msg'
 @pytest.fixture(scope='module')
 def sequence_bag(tmp_path_factory):
     out = tmp_path_factory.mktemp('recording') / 'sim'
-    assert cli(['simulate', '--config', 'complex', '--frames', '3', '--seed', '5', '--fast', '--image_ext', '.jpg',
-                '--bag', '--compressed', '--out', str(out)]) == 0
+    assert (
+        cli(
+            [
+                'simulate',
+                '--config',
+                'complex',
+                '--frames',
+                '3',
+                '--seed',
+                '5',
+                '--fast',
+                '--image_ext',
+                '.jpg',
+                '--bag',
+                '--compressed',
+                '--out',
+                str(out),
+            ]
+        )
+        == 0
+    )
     return out / 'bag'
 
 
@@ -30,26 +49,38 @@ def _write_recording(path, gt: BevPoints, drop_frame: int):
         store.register(get_types_from_msg(msg.read_text(), f'matrix_msgs/msg/{msg.stem}'))
     T = store.types
     with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
-        conns = {t: writer.add_connection(t, 'matrix_msgs/msg/TrackArray', typestore=store)
-                 for t in ('/tracks', '/detections')}
+        conns = {
+            t: writer.add_connection(t, 'matrix_msgs/msg/TrackArray', typestore=store)
+            for t in ('/tracks', '/detections')
+        }
         grid = writer.add_connection('/bev_heatmap', 'nav_msgs/msg/OccupancyGrid', typestore=store)
         for frame in sorted(set(gt.frames.tolist()) - {drop_frame}):
             ns = int((1.0 + 0.5 * frame) * 1e9)
-            header = T['std_msgs/msg/Header'](stamp=T['builtin_interfaces/msg/Time'](
-                sec=ns // 10**9, nanosec=ns % 10**9), frame_id='world')
+            header = T['std_msgs/msg/Header'](
+                stamp=T['builtin_interfaces/msg/Time'](sec=ns // 10**9, nanosec=ns % 10**9), frame_id='world'
+            )
             tracks = []
             for k in gt.at(frame):
-                tracks.append(T['matrix_msgs/msg/Track'](
-                    id=int(gt.ids[k]), position=T['geometry_msgs/msg/Point'](x=gt.xy[k, 0], y=gt.xy[k, 1], z=0.0),
-                    velocity=T['geometry_msgs/msg/Vector3'](x=0.0, y=0.0, z=0.0), score=0.9, age=frame, misses=0))
+                tracks.append(
+                    T['matrix_msgs/msg/Track'](
+                        id=int(gt.ids[k]),
+                        position=T['geometry_msgs/msg/Point'](x=gt.xy[k, 0], y=gt.xy[k, 1], z=0.0),
+                        velocity=T['geometry_msgs/msg/Vector3'](x=0.0, y=0.0, z=0.0),
+                        score=0.9,
+                        age=frame,
+                        misses=0,
+                    )
+                )
             for topic in conns:
                 msg = T['matrix_msgs/msg/TrackArray'](header=header, tracks=tracks)
                 writer.write(conns[topic], ns, store.serialize_cdr(msg, 'matrix_msgs/msg/TrackArray'))
             quat = T['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=0.0, w=1.0)
-            pose = T['geometry_msgs/msg/Pose'](position=T['geometry_msgs/msg/Point'](x=-1.0, y=-31.0, z=0.0),
-                                               orientation=quat)
-            info = T['nav_msgs/msg/MapMetaData'](map_load_time=header.stamp, resolution=0.25, width=128, height=128,
-                                                 origin=pose)
+            pose = T['geometry_msgs/msg/Pose'](
+                position=T['geometry_msgs/msg/Point'](x=-1.0, y=-31.0, z=0.0), orientation=quat
+            )
+            info = T['nav_msgs/msg/MapMetaData'](
+                map_load_time=header.stamp, resolution=0.25, width=128, height=128, origin=pose
+            )
             heat = T['nav_msgs/msg/OccupancyGrid'](header=header, info=info, data=np.zeros(128 * 128, np.int8))
             writer.write(grid, ns, store.serialize_cdr(heat, 'nav_msgs/msg/OccupancyGrid'))
 
@@ -59,8 +90,19 @@ def test_ground_truth_scores_perfectly(sequence_bag, tmp_path):
     assert sorted(set(gt.frames.tolist())) == [0, 1, 2] and len(gt) == 3 * 40
     write_bev_points(tmp_path / 'tracks.txt', gt)
     out = tmp_path / 'm.json'
-    assert cli(['evaluate-recording', str(tmp_path / 'tracks.txt'), '--ground-truth', str(sequence_bag),
-                '--json', str(out)]) == 0
+    assert (
+        cli(
+            [
+                'evaluate-recording',
+                str(tmp_path / 'tracks.txt'),
+                '--ground-truth',
+                str(sequence_bag),
+                '--json',
+                str(out),
+            ]
+        )
+        == 0
+    )
     m = json.loads(out.read_text())
     assert m['tracking']['mota'] == 1.0 and m['detection']['moda'] == 1.0 and m['detections_source'] == 'tracks'
 
@@ -71,8 +113,9 @@ def test_recorder_bag_with_a_lost_frame(sequence_bag, tmp_path):
     rec = read_recording_bag(tmp_path / 'rec')
     assert rec.track_frames == [0, 2] and rec.area == (-1.0, -31.0, 31.0, 1.0)
     out = tmp_path / 'm.json'
-    assert cli(['evaluate-recording', str(tmp_path / 'rec'), '--ground-truth', str(sequence_bag),
-                '--json', str(out)]) == 0
+    assert (
+        cli(['evaluate-recording', str(tmp_path / 'rec'), '--ground-truth', str(sequence_bag), '--json', str(out)]) == 0
+    )
     m = json.loads(out.read_text())
     assert m['frames_without_tracks'] == [1] and m['detections_source'] == 'detections'
     assert m['detection']['recall'] == pytest.approx(2 / 3) and m['detection']['precision'] == 1.0

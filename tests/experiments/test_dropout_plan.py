@@ -18,16 +18,16 @@ def test_subsets_drop_the_rate_of_the_views(rate, dropped):
         assert len(s.dropped) == dropped == dropped_count(rate, len(VIEWS))
         assert len(s.kept) == len(VIEWS) - dropped
         assert set(s.kept) | set(s.dropped) == set(VIEWS) and not set(s.kept) & set(s.dropped)
-        assert list(s.kept) == [v for v in VIEWS if v in s.kept]     # original order kept
+        assert list(s.kept) == [v for v in VIEWS if v in s.kept]  # original order kept
 
 
 def test_subsets_are_seeded_and_random():
     a = dropout_subsets(VIEWS, 0.5, seeds=range(20))
     b = dropout_subsets(VIEWS, 0.5, seeds=range(20))
     assert a == b
-    assert len({s.dropped for s in a}) > 10             # 70 possible subsets: seeds give different ones
+    assert len({s.dropped for s in a}) > 10  # 70 possible subsets: seeds give different ones
     counts = {v: sum(v in s.dropped for s in dropout_subsets(VIEWS, 0.25, seeds=range(400))) for v in VIEWS}
-    assert all(60 < c < 140 for c in counts.values()), counts   # each view dropped about 100 times of 400
+    assert all(60 < c < 140 for c in counts.values()), counts  # each view dropped about 100 times of 400
 
 
 def test_bad_rate_is_an_error():
@@ -52,16 +52,31 @@ def test_plan_has_every_experiment_once_and_in_order(name):
             assert len(runs) == len(size.dropout_seeds)
             assert all(len(e['dropped']) == dropped_count(rate, 8) == 8 - len(e['views']) for e in runs)
     # 4: every training seed evaluated; 1: every calibration source on the main complex model.
-    assert {e['model'] for e in evals if e['test'] == 'complex' and not e['dropped']} >= \
-        {f'complex_s{s}' for s in size.seeds} | {'complex_static'}
-    assert {e['calibration'] for e in evals if e['model'] == f'complex_s{size.seeds[0]}'} == \
-        {'ground_truth', 'pnp', 'pnp_stale', 'registration', 'frozen_first', 'reference'}
+    assert {e['model'] for e in evals if e['test'] == 'complex' and not e['dropped']} >= {
+        f'complex_s{s}' for s in size.seeds
+    } | {'complex_static'}
+    assert {e['calibration'] for e in evals if e['model'] == f'complex_s{size.seeds[0]}'} == {
+        'ground_truth',
+        'pnp',
+        'pnp_stale',
+        'registration',
+        'frozen_first',
+        'reference',
+    }
     # 1: the same sources on the simple variant, and static-trained baselines on both variants.
-    assert {e['calibration'] for e in evals if e['model'] == 'simple_s0' and e['test'] == 'simple'} == \
-        {'ground_truth', 'pnp', 'pnp_stale', 'registration', 'frozen_first', 'reference'}
+    assert {e['calibration'] for e in evals if e['model'] == 'simple_s0' and e['test'] == 'simple'} == {
+        'ground_truth',
+        'pnp',
+        'pnp_stale',
+        'registration',
+        'frozen_first',
+        'reference',
+    }
     for variant in ('simple', 'complex'):
-        assert any(e['model'] == f'{variant}_static' and e['test'] == variant and e['calibration'] == 'frozen_first'
-                   for e in evals)
+        assert any(
+            e['model'] == f'{variant}_static' and e['test'] == variant and e['calibration'] == 'frozen_first'
+            for e in evals
+        )
         assert next(s for s in plan if s.name == f'train/{variant}_static').params['calibration'] == 'frozen_first'
     # 2: transfer starts from the main complex model and uses each share of the frames (the paper's 50 % too).
     assert 0.5 in size.transfer_shares
@@ -99,9 +114,13 @@ def test_standard_size_is_the_default_detectors_recipe():
 
     from matrix_core.bev.config import CONFIG_DIR
 
-    recipe = yaml.safe_load((CONFIG_DIR / 'detector.yaml').read_text())   # the default detector's recipe
+    recipe = yaml.safe_load((CONFIG_DIR / 'detector.yaml').read_text())  # the default detector's recipe
     s = SIZES['standard']
     assert (s.model, s.image_width, s.image_height, s.cell_m) == (
-        recipe['bev']['model'], recipe['bev']['image_width'], recipe['bev']['image_height'], recipe['bev']['cell_m'])
+        recipe['bev']['model'],
+        recipe['bev']['image_width'],
+        recipe['bev']['image_height'],
+        recipe['bev']['cell_m'],
+    )
     assert s.augment and s.jobs == 2 and not s.smoke_test and s.expected_minutes <= 150
     assert len(s.ransac_seeds) == 10 and s.transfer_shares == (0.05, 0.1, 0.25, 0.5)

@@ -25,35 +25,54 @@ def test_table_iii_is_the_papers():
             got = paper.STATIONARY[method][dataset]
             want = {k: Figure(v) for k, v in zip(('MODA', 'MODP', 'MOTA', 'MOTP'), values) if v is not None}
             assert got == want, (method, dataset)
-            assert [str(got[k]) for k in want] == [f'{v:.1f}' for v in values if v is not None]   # 95.0, 81.0
+            assert [str(got[k]) for k in want] == [f'{v:.1f}' for v in values if v is not None]  # 95.0, 81.0
 
 
 def test_moving_drone_figures_are_the_papers():
     assert {k: {m: str(f) for m, f in v.items()} for k, v in paper.SIMPLE.items()} == {
-        'EarlyBird': {'MODA': '94', 'recall': '95.9'}, 'TrackTacular': {'MOTA': '92.7', 'IDF1': '79.64'}}
+        'EarlyBird': {'MODA': '94', 'recall': '95.9'},
+        'TrackTacular': {'MOTA': '92.7', 'IDF1': '79.64'},
+    }
     assert 'marginally lower' in paper.SIMPLE_PROPOSED_NOTE
     assert paper.COMPLEX == {
         'TrackTacular': {'MODA': Figure(5.72), 'MOTA': Figure(31.44), 'MT': Figure(0)},
-        'proposed': {'MODA': Figure(89, '~'), 'MOTA': Figure(88.5, '~'), 'precision': Figure(97, '~'),
-                     'recall': Figure(86, '~'), 'MT': Figure(80, '~')}}
+        'proposed': {
+            'MODA': Figure(89, '~'),
+            'MOTA': Figure(88.5, '~'),
+            'precision': Figure(97, '~'),
+            'recall': Figure(86, '~'),
+            'MT': Figure(80, '~'),
+        },
+    }
     assert paper.VARIANTS == {'simple': paper.SIMPLE, 'complex': paper.COMPLEX}
 
 
 def test_transfer_dropout_and_runs_are_the_papers():
     assert paper.TRANSFER_SHARE == 0.5
-    assert paper.TRANSFER == {'scratch': {'MODA': Figure(54, '~'), 'MODP': Figure(80, '>')},
-                              'pretrained': {'MODA': Figure(69, '~'), 'MODP': Figure(80, '>')}}
+    assert paper.TRANSFER == {
+        'scratch': {'MODA': Figure(54, '~'), 'MODP': Figure(80, '>')},
+        'pretrained': {'MODA': Figure(69, '~'), 'MODP': Figure(80, '>')},
+    }
     assert 'relatively similar' in paper.TRANSFER_NOTE
     assert paper.DROPOUT == {
         ('simple', 'MODA'): {0.25: Figure(80, '>'), 0.75: Figure(45, '~')},
         ('complex', 'MODA'): {0.25: Figure(80, '>'), 0.75: Figure(36, '~')},
         ('complex', 'MOTA'): {0.25: Figure(80, '>'), 0.75: Figure(40, '~')},
-        ('simple', 'MOTA'): {0.75: Figure(60, '~')}}
+        ('simple', 'MOTA'): {0.75: Figure(60, '~')},
+    }
     assert paper.DROPOUT_MOTP_RANGE == (75.0, 85.0) and 'relatively stable' in paper.DROPOUT_MODP_NOTE
     assert (paper.EPOCHS, paper.RUNS) == (100, 10) and 'RANSAC' in paper.RUNS_VARY
 
 
-@pytest.mark.parametrize('figure, text', [(Figure(89, '~'), '~89'), (Figure(80, '>'), '>80'),
-                                          (Figure(5.72), '5.72'), (Figure(79.64), '79.64'), (Figure(94), '94')])
+@pytest.mark.parametrize(
+    'figure, text',
+    [
+        (Figure(89, '~'), '~89'),
+        (Figure(80, '>'), '>80'),
+        (Figure(5.72), '5.72'),
+        (Figure(79.64), '79.64'),
+        (Figure(94), '94'),
+    ],
+)
 def test_figures_print_as_the_paper_writes_them(figure, text):
     assert str(figure) == text

@@ -24,8 +24,25 @@ FRAMES = 4
 @pytest.fixture(scope='module')
 def sequence(tmp_path_factory):
     out = tmp_path_factory.mktemp('fusion') / 'sim'
-    assert cli(['simulate', '--config', 'complex', '--frames', str(FRAMES), '--seed', '11', '--fast',
-                '--image_ext', '.png', '--out', str(out)]) == 0
+    assert (
+        cli(
+            [
+                'simulate',
+                '--config',
+                'complex',
+                '--frames',
+                str(FRAMES),
+                '--seed',
+                '11',
+                '--fast',
+                '--image_ext',
+                '.png',
+                '--out',
+                str(out),
+            ]
+        )
+        == 0
+    )
     return out
 
 
@@ -48,7 +65,7 @@ def _live(sequence, model, make_view, settings=None):
     for k, frame in enumerate(dataset.frames):
         views = {v: make_view(dataset, v, frame) for v in dataset.views}
         results.append(fuser.process(1.0 + 0.5 * k, {v: x for v, x in views.items() if x is not None}))
-        fuser.prepare_next()   # as the fuse node, once a frame is published (offline, run_frames computes it later)
+        fuser.prepare_next()  # as the fuse node, once a frame is published (offline, run_frames computes it later)
     return results
 
 
@@ -77,7 +94,7 @@ def _assert_same(offline, live, atol):
 def test_camera_info_input_equals_offline(sequence, model):
     offline = _offline(sequence, model)
     live = _live(sequence, model, _from_camera_info)
-    assert sum(len(r.detections) for r in live) > 10 * FRAMES   # a crowd of 40 is detected
+    assert sum(len(r.detections) for r in live) > 10 * FRAMES  # a crowd of 40 is detected
     assert any(r.tracks for r in live)
     _assert_same(offline, live, 1e-5)
     assert all(r.available_views == [f'D{i}' for i in range(1, 9)] for r in live)
@@ -86,10 +103,12 @@ def test_camera_info_input_equals_offline(sequence, model):
 
 def test_registration_input_equals_offline(sequence, model):
     """A HomographyStamped's h_img_to_ground (pixels -> ground, normalised [2][2] = 1) gives the same result."""
+
     def from_registration(dataset, view, frame):
         H = np.linalg.inv(dataset.camera(view, frame).img_H_ground())
-        return ViewInput(dataset.load_image(view, frame), Registration('ok', None, H / H[2, 2]).img_H_ground,
-                         confidence=0.9)
+        return ViewInput(
+            dataset.load_image(view, frame), Registration('ok', None, H / H[2, 2]).img_H_ground, confidence=0.9
+        )
 
     _assert_same(_offline(sequence, model), _live(sequence, model, from_registration), 1e-4)
 
@@ -132,9 +151,9 @@ def test_gaps_reset_state(sequence, model):
     views = {v: _from_camera_info(dataset, v, dataset.frames[0]) for v in dataset.views}
     assert fuser.process(1.0, views).resets == []
     assert fuser.process(1.5, views).resets == []
-    assert fuser.process(2.5, views).resets == ['temporal']            # one frame lost
+    assert fuser.process(2.5, views).resets == ['temporal']  # one frame lost
     assert fuser.process(20.0, views).resets == ['temporal', 'tracker']  # a new sequence
-    assert fuser.process(3.0, views).resets == ['temporal', 'tracker']   # time went back (bag restarted)
+    assert fuser.process(3.0, views).resets == ['temporal', 'tracker']  # time went back (bag restarted)
 
 
 def test_a_failed_prepare_next_restarts_the_temporal_state_and_says_so(sequence, model, monkeypatch):
@@ -146,10 +165,11 @@ def test_a_failed_prepare_next_restarts_the_temporal_state_and_says_so(sequence,
 
     def fail(result):
         raise RuntimeError('out of memory')
+
     monkeypatch.setattr(fuser.runner.network, 'prepare_next', fail)
-    fuser.prepare_next()   # the node goes on: no error escapes, the carried features are forgotten
+    fuser.prepare_next()  # the node goes on: no error escapes, the carried features are forgotten
     assert fuser.runner.previous is None
-    assert fuser.process(1.5, views).resets == ['temporal']   # the next frame reports it (log, /diagnostics)
+    assert fuser.process(1.5, views).resets == ['temporal']  # the next frame reports it (log, /diagnostics)
     assert fuser.process(2.0, views).resets == []
 
 
@@ -167,7 +187,7 @@ def test_settings_validate():
 def test_checkpoint_names_a_path_or_a_shipped_file(tmp_path, monkeypatch):
     assert FuseSettings().checkpoint_path() == shipped_checkpoint()
     assert FuseSettings(checkpoint='detector_seed0.pt').checkpoint_path() == shipped_checkpoint('detector_seed0.pt')
-    monkeypatch.chdir(tmp_path)   # a file of that name here is taken first: a path is a path
+    monkeypatch.chdir(tmp_path)  # a file of that name here is taken first: a path is a path
     (tmp_path / 'detector_seed0.pt').write_bytes(b'x')
     assert FuseSettings(checkpoint='detector_seed0.pt').checkpoint_path() == Path('detector_seed0.pt')
     # neither here nor shipped: the path as given, so that loading it names it
@@ -190,8 +210,10 @@ def test_inputs_made_on_arrival_give_the_same_frames(matrix_sample, model):
         messages = {}
         for v in dataset.views:
             ground_H_img = np.linalg.inv(dataset.camera(v, frame).img_H_ground())
-            messages[v] = (image_to_compressed(dataset.load_image(v, frame)),
-                           registration_to_msg(Registration('ok', np.eye(3), ground_H_img, confidence=1.0)))
+            messages[v] = (
+                image_to_compressed(dataset.load_image(v, frame)),
+                registration_to_msg(Registration('ok', np.eye(3), ground_H_img, confidence=1.0)),
+            )
             inputs[1].decode_early(v, messages[v][0])
         views = [{v: x.view_input(v, *m, 'homography') for v, m in messages.items()} for x in inputs]
         assert all(views[1][v].network_image is not None and views[0][v].network_image is None for v in dataset.views)
@@ -211,7 +233,7 @@ def test_reduced_jpeg_decode_gives_the_detections_of_the_full_decode(matrix_samp
 
     net, bev = model
     dataset = open_dataset(matrix_sample)
-    r = jpeg_reduction((1920, 1080), (bev.image_width, bev.image_height))   # complex_quick: 320x176 -> 4
+    r = jpeg_reduction((1920, 1080), (bev.image_width, bev.image_height))  # complex_quick: 320x176 -> 4
     assert r == (4 if bev.image_width <= 480 and bev.image_height <= 270 else 2)
     assert jpeg_reduction((1920, 1080), (480, 272)) == 2 and jpeg_reduction((640, 360), (480, 272)) == 1
     flag = {2: cv2.IMREAD_REDUCED_COLOR_2, 4: cv2.IMREAD_REDUCED_COLOR_4}[r]

@@ -34,15 +34,16 @@ def test_box_of_a_person_ahead_by_hand():
 def test_a_person_behind_the_block_is_not_visible():
     block = ImageBoxSettings(obstacle_boxes=[4.0, -1.0, 6.0, 1.0, 3.0])
     found = image_boxes(CAMERA, [1, 2], [[10.0, 0.0], [10.0, 3.0]], [1.0, 1.0], block)
-    assert [b.track_id for b in found] == [2]          # (10, 3) is beside the block, (10, 0) behind it
+    assert [b.track_id for b in found] == [2]  # (10, 3) is beside the block, (10, 0) behind it
 
 
 def test_outside_the_image_or_behind_the_camera_is_not_reported():
     # (10, 20): 2000 px left of the image; (-5, 0): behind the camera; (10, 9.84): 3 % of its box in the image
-    found = image_boxes(CAMERA, [1, 2, 3, 4], [[10.0, 20.0], [-5.0, 0.0], [10.0, 9.84], [10.0, 0.0]], [1.0] * 4,
-                        NO_OBSTACLES)
+    found = image_boxes(
+        CAMERA, [1, 2, 3, 4], [[10.0, 20.0], [-5.0, 0.0], [10.0, 9.84], [10.0, 0.0]], [1.0] * 4, NO_OBSTACLES
+    )
     assert [b.track_id for b in found] == [4]
-    for b in image_boxes(CAMERA, [5], [[10.0, 9.5]], [1.0], NO_OBSTACLES):   # mostly in: reported, clipped
+    for b in image_boxes(CAMERA, [5], [[10.0, 9.5]], [1.0], NO_OBSTACLES):  # mostly in: reported, clipped
         assert b.box[0] == -0.5
 
 
@@ -63,7 +64,7 @@ def test_occlusion_in_a_crowd_is_that_of_the_exact_union():
         exact = [covered_fraction(b, boxes[:k]) > NO_OBSTACLES.person_occlusion for k, b in enumerate(boxes)]
         assert [b.occluded for b in found] == exact
         flagged += sum(exact)
-    assert flagged > 20   # the crowds do hide people
+    assert flagged > 20  # the crowds do hide people
 
 
 def test_covered_fraction_of_the_union():

@@ -8,8 +8,7 @@ import sys
 
 def _policy_after_import(environment):
     code = 'import os, matrix_bev_tracker; print(os.environ.get("OMP_WAIT_POLICY"))'
-    run = subprocess.run([sys.executable, '-c', code], env=environment, capture_output=True, text=True,
-                         timeout=60)
+    run = subprocess.run([sys.executable, '-c', code], env=environment, capture_output=True, text=True, timeout=60)
     assert run.returncode == 0, run.stderr
     return run.stdout.strip()
 

@@ -10,8 +10,9 @@ from pathlib import Path
 
 from launch import LaunchContext
 from launch.actions import OpaqueFunction
-from launch.launch_description_sources.python_launch_file_utilities import \
-    get_launch_description_from_python_launch_file
+from launch.launch_description_sources.python_launch_file_utilities import (
+    get_launch_description_from_python_launch_file,
+)
 from launch.utilities import perform_substitutions
 from launch_ros.actions import Node
 from launch_ros.utilities import evaluate_parameters
@@ -25,8 +26,10 @@ def load(path):
 def declared_arguments(description) -> dict:
     """name -> (default as text, or None when the argument is required; description)."""
     context = LaunchContext()
-    return {a.name: (None if a.default_value is None else perform_substitutions(context, a.default_value),
-                     a.description) for a in description.get_launch_arguments()}
+    return {
+        a.name: (None if a.default_value is None else perform_substitutions(context, a.default_value), a.description)
+        for a in description.get_launch_arguments()
+    }
 
 
 @dataclass
@@ -36,11 +39,11 @@ class LaunchedNode:
 
     package: str
     executable: str
-    name: str        # as given to Node (not the full name; Node.UNSPECIFIED_NODE_NAME when none)
-    namespace: str   # '' when none
+    name: str  # as given to Node (not the full name; Node.UNSPECIFIED_NODE_NAME when none)
+    namespace: str  # '' when none
     parameters: list
-    remappings: dict   # '-r' rules: source -> destination
-    prefix: str        # command words before the executable ('' when none), e.g. 'nice -n 10'
+    remappings: dict  # '-r' rules: source -> destination
+    prefix: str  # command words before the executable ('' when none), e.g. 'nice -n 10'
 
 
 def launch(description, **arguments) -> list:
@@ -57,12 +60,18 @@ def launch(description, **arguments) -> list:
 
 
 def _launched(node: Node, context) -> LaunchedNode:
-    node._perform_substitutions(context)   # launch_ros keeps what it was given private; this resolves it
+    node._perform_substitutions(context)  # launch_ros keeps what it was given private; this resolves it
     namespace = node.expanded_node_namespace.strip('/')
     parameters = evaluate_parameters(context, node._Node__parameters)
-    return LaunchedNode(node.node_package, node.node_executable, node.node_name.rsplit('/', 1)[-1],
-                        '' if namespace == Node.UNSPECIFIED_NODE_NAMESPACE.strip('/') else namespace,
-                        [str(p) if isinstance(p, Path) else {k: list(v) if isinstance(v, tuple) else v
-                                                             for k, v in p.items()} for p in parameters],
-                        dict(node.expanded_remapping_rules or []),
-                        perform_substitutions(context, node.process_description.prefix or []))
+    return LaunchedNode(
+        node.node_package,
+        node.node_executable,
+        node.node_name.rsplit('/', 1)[-1],
+        '' if namespace == Node.UNSPECIFIED_NODE_NAMESPACE.strip('/') else namespace,
+        [
+            str(p) if isinstance(p, Path) else {k: list(v) if isinstance(v, tuple) else v for k, v in p.items()}
+            for p in parameters
+        ],
+        dict(node.expanded_remapping_rules or []),
+        perform_substitutions(context, node.process_description.prefix or []),
+    )

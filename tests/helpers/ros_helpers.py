@@ -23,15 +23,21 @@ def start_node(executable, *params: str, env: dict = None) -> subprocess.Popen:
     """Run an installed node (``node_executable(package, name)``) with ``-p`` parameters ('name:=value');
     its stdout and stderr are collected as text (read them with :func:`stop` or :func:`finish`)."""
     args = [str(executable), '--ros-args', *[a for p in params for a in ('-p', p)]]
-    return subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                            env=None if env is None else {**os.environ, **env})
+    return subprocess.Popen(
+        args,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=None if env is None else {**os.environ, **env},
+    )
 
 
 def ros2(*args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess:
     """Run the ``ros2`` command line to completion (``scripts/env.sh`` puts it on PATH: a ROS install's, or
     the one scripts/build_cli.sh built); stdout and stderr together as text in ``.stdout``."""
-    return subprocess.run(['ros2', *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                          timeout=timeout_s)
+    return subprocess.run(
+        ['ros2', *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=timeout_s
+    )
 
 
 def ros2_graph(verb: str, *args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess:
@@ -49,15 +55,16 @@ def ros2_graph(verb: str, *args: str, timeout_s: float = 120.0) -> subprocess.Co
 def start_ros2(*args: str) -> subprocess.Popen:
     """Start ``ros2 ARGS...`` (``ros2 run``, ``ros2 launch``, ``ros2 topic echo``) in its own process group,
     so that :func:`stop` reaches everything it started; output collected as text."""
-    return subprocess.Popen(['ros2', *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                            start_new_session=True)
+    return subprocess.Popen(
+        ['ros2', *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True
+    )
 
 
 def finish(process: subprocess.Popen, timeout_s: float = 20.0, why: str = 'did not exit') -> str:
     """Output of ``process`` once it exited; killed (no orphans) if it has not exited within ``timeout_s``,
     the output then ending in ``[killed: WHY]``."""
     try:
-        return process.communicate(timeout=timeout_s)[0] or ''   # '' when not piped
+        return process.communicate(timeout=timeout_s)[0] or ''  # '' when not piped
     except subprocess.TimeoutExpired:
         _kill(process)
         return (process.communicate()[0] or '') + f'\n[killed: {why}]'
@@ -112,8 +119,9 @@ def stop_all(processes: Iterable[subprocess.Popen], timeout_s: float = 20.0) -> 
     return [finish(p, timeout_s) for p in processes]
 
 
-def spin_until(node, done: Callable[[], bool], processes: Iterable[subprocess.Popen] = (), timeout_s: float = 30.0,
-               executor=None) -> bool:
+def spin_until(
+    node, done: Callable[[], bool], processes: Iterable[subprocess.Popen] = (), timeout_s: float = 30.0, executor=None
+) -> bool:
     """Spin ``node`` (or ``executor``, which holds it) until ``done()``, the timeout, or one of ``processes``
     exited; returns ``done()``."""
     processes = list(processes)
@@ -131,8 +139,14 @@ def spin_for(node, seconds: float, executor=None) -> None:
     spin_until(node, lambda: False, timeout_s=seconds, executor=executor)
 
 
-def wait_matched(node, endpoints: Iterable, processes: Iterable[subprocess.Popen] = (), timeout_s: float = 60.0,
-                 count: int = 1, executor=None) -> None:
+def wait_matched(
+    node,
+    endpoints: Iterable,
+    processes: Iterable[subprocess.Popen] = (),
+    timeout_s: float = 60.0,
+    count: int = 1,
+    executor=None,
+) -> None:
     """Spin until every publisher has at least ``count`` matched subscriptions and every subscription at least
     ``count`` matched publishers (``count=0``: none, the other side is gone); fails naming those still waiting."""
     endpoints, processes = list(endpoints), list(processes)
@@ -146,8 +160,10 @@ def wait_matched(node, endpoints: Iterable, processes: Iterable[subprocess.Popen
     if not spin_until(node, lambda: all(map(ok, endpoints)), processes, timeout_s, executor):
         waiting = [f'{e.topic_name} ({matched(e)})' for e in endpoints if not ok(e)]
         exited = [p.args[0] for p in processes if p.poll() is not None]
-        raise AssertionError(f'not matched ({count} each): {", ".join(waiting)}; '
-                             + (f'exited: {exited}' if exited else f'waited {timeout_s:g} s'))
+        raise AssertionError(
+            f'not matched ({count} each): {", ".join(waiting)}; '
+            + (f'exited: {exited}' if exited else f'waited {timeout_s:g} s')
+        )
 
 
 def wait_for(condition: Callable[[], bool], timeout_s: float, what: str) -> None:

@@ -3,8 +3,14 @@
 import numpy as np
 import pytest
 
-from matrix_core.metrics.image_boxes import (FrameBoxes, image_metrics, iou_matrix, per_view_metrics,
-                                             read_mot_boxes, write_mot_boxes)
+from matrix_core.metrics.image_boxes import (
+    FrameBoxes,
+    image_metrics,
+    iou_matrix,
+    per_view_metrics,
+    read_mot_boxes,
+    write_mot_boxes,
+)
 
 A, B, C = [0, 0, 10, 10], [100, 0, 110, 10], [200, 0, 210, 10]
 
@@ -18,8 +24,9 @@ def test_known_case_over_two_drones():
     gt = FrameBoxes([0, 0, 1, 1, 0], ['D1', 'D1', 'D1', 'D1', 'D2'], [1, 2, 1, 2, 1], [A, B, A, B, A])
     # pred: track 7 = person 1 everywhere; frame 1 D1 misses person 2 and has a false box at C;
     # D2 frame 0 sees person 1 as track 9 (a different identity in another drone: a switch overall).
-    pred = FrameBoxes([0, 0, 1, 1, 0], ['D1', 'D1', 'D1', 'D1', 'D2'], [7, 8, 7, 5, 9],
-                      [A, [101, 0, 111, 10], A, C, [1, 0, 11, 10]])
+    pred = FrameBoxes(
+        [0, 0, 1, 1, 0], ['D1', 'D1', 'D1', 'D1', 'D2'], [7, 8, 7, 5, 9], [A, [101, 0, 111, 10], A, C, [1, 0, 11, 10]]
+    )
     m = per_view_metrics(gt, pred)
     d1, d2, total = m['D1'], m['D2'], m['all']
     assert (d1.num_gt, d1.fp, d1.fn, d1.id_switches) == (4, 1, 1, 0)

@@ -20,19 +20,19 @@ def simulated_sequence(seed: int, people: int = 12, frames: int = 40):
         vel += rng.normal(0, 0.15, vel.shape)
         pos += vel * 0.5
         present = rng.random(people) > 0.08
-        if f % 13 == 5:                          # swap two identities
+        if f % 13 == 5:  # swap two identities
             a, b = rng.choice(people, 2, replace=False)
             track_of[[a, b]] = track_of[[b, a]]
-        if rng.random() < 0.1:                   # a track restarts with a fresh id
+        if rng.random() < 0.1:  # a track restarts with a fresh id
             track_of[rng.integers(people)] = next_id
             next_id += 1
         for i in np.flatnonzero(present):
             gt.append((f, i, *pos[i]))
-            if f % 11 == 7 or rng.random() < 0.12:   # whole frame without output / a miss
+            if f % 11 == 7 or rng.random() < 0.12:  # whole frame without output / a miss
                 continue
             noise = rng.normal(0, 0.35, 2)
             pred.append((f, track_of[i], *(pos[i] + noise)))
-        for _ in range(rng.poisson(0.8)):           # short-lived false tracks
+        for _ in range(rng.poisson(0.8)):  # short-lived false tracks
             pred.append((f, next_id, *rng.uniform(0, 12, 2)))
             next_id += 1
     gt, pred = np.array(gt), np.array(pred)
@@ -43,18 +43,36 @@ def motmetrics_summary(gt: BevPoints, pred: BevPoints, gate: float, fresh_ids: b
     acc = mm.MOTAccumulator(auto_id=False)
     for f in sorted(set(gt.frames) | set(pred.frames)):
         g, p = gt.at(f), pred.at(f)
-        d = np.sqrt(mm.distances.norm2squared_matrix(gt.xy[g], pred.xy[p], max_d2=gate ** 2))
+        d = np.sqrt(mm.distances.norm2squared_matrix(gt.xy[g], pred.xy[p], max_d2=gate**2))
         oids = [(f, k) for k in range(len(g))] if fresh_ids else gt.ids[g]
         hids = [(f, k) for k in range(len(p))] if fresh_ids else pred.ids[p]
         if fresh_ids:  # ids unique per frame: each frame matched on its own (= detection metrics)
-            oids = [hash(o) % (2 ** 31) for o in oids]
-            hids = [hash(h) % (2 ** 31) + 2 ** 31 for h in hids]
+            oids = [hash(o) % (2**31) for o in oids]
+            hids = [hash(h) % (2**31) + 2**31 for h in hids]
         acc.update(oids, hids, d, frameid=int(f))
     mh = mm.metrics.create()
-    return mh.compute(acc, metrics=['mota', 'motp', 'idf1', 'idp', 'idr', 'precision', 'recall',
-                                    'mostly_tracked', 'partially_tracked', 'mostly_lost', 'num_switches',
-                                    'num_fragmentations', 'num_false_positives', 'num_misses',
-                                    'num_unique_objects', 'num_matches'], name='x').iloc[0]
+    return mh.compute(
+        acc,
+        metrics=[
+            'mota',
+            'motp',
+            'idf1',
+            'idp',
+            'idr',
+            'precision',
+            'recall',
+            'mostly_tracked',
+            'partially_tracked',
+            'mostly_lost',
+            'num_switches',
+            'num_fragmentations',
+            'num_false_positives',
+            'num_misses',
+            'num_unique_objects',
+            'num_matches',
+        ],
+        name='x',
+    ).iloc[0]
 
 
 @pytest.mark.parametrize('seed', [0, 1, 2])
@@ -63,12 +81,24 @@ def test_tracking_metrics_match_motmetrics(seed):
     ours = tracking_metrics(gt, pred, gate=1.0)
     ref = motmetrics_summary(gt, pred, gate=1.0)
     assert ref['num_switches'] > 0 and ref['num_fragmentations'] > 0 and ref['num_false_positives'] > 0
-    for mine, theirs in [('mota', 'mota'), ('motp_m', 'motp'), ('idf1', 'idf1'), ('idp', 'idp'), ('idr', 'idr'),
-                         ('precision', 'precision'), ('recall', 'recall'), ('mostly_tracked', 'mostly_tracked'),
-                         ('partially_tracked', 'partially_tracked'), ('mostly_lost', 'mostly_lost'),
-                         ('id_switches', 'num_switches'), ('fragmentations', 'num_fragmentations'),
-                         ('fp', 'num_false_positives'), ('fn', 'num_misses'), ('num_gt_ids', 'num_unique_objects'),
-                         ('matches', 'num_matches')]:
+    for mine, theirs in [
+        ('mota', 'mota'),
+        ('motp_m', 'motp'),
+        ('idf1', 'idf1'),
+        ('idp', 'idp'),
+        ('idr', 'idr'),
+        ('precision', 'precision'),
+        ('recall', 'recall'),
+        ('mostly_tracked', 'mostly_tracked'),
+        ('partially_tracked', 'partially_tracked'),
+        ('mostly_lost', 'mostly_lost'),
+        ('id_switches', 'num_switches'),
+        ('fragmentations', 'num_fragmentations'),
+        ('fp', 'num_false_positives'),
+        ('fn', 'num_misses'),
+        ('num_gt_ids', 'num_unique_objects'),
+        ('matches', 'num_matches'),
+    ]:
         assert getattr(ours, mine) == pytest.approx(float(ref[theirs]), abs=1e-6), mine
     assert ours.motp_percent == pytest.approx(100 * (1 - float(ref['motp'])), abs=1e-6)
 

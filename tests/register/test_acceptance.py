@@ -21,12 +21,14 @@ def _register_all(dataset, settings, views=None, frames=None):
     out = {}
     for view in views or dataset.views:
         ref = dataset.reference_camera(view)
-        registrar = Registrar(settings, dataset.reference_image(view), ref, dataset.area,
-                              f'{view}/reference')
+        registrar = Registrar(settings, dataset.reference_image(view), ref, dataset.area, f'{view}/reference')
         for frame in frames or dataset.frames:
             r = registrar.register(dataset.load_image(view, frame), frame)
-            err = (homography_error_px(r.ref_H_img, dataset.camera(view, frame), ref, dataset.area,
-                                       settings.exclude_boxes) if r.ok else None)
+            err = (
+                homography_error_px(r.ref_H_img, dataset.camera(view, frame), ref, dataset.area, settings.exclude_boxes)
+                if r.ok
+                else None
+            )
             out[view, frame] = (r, err)
     return out
 
@@ -49,9 +51,12 @@ def test_default_backend_meets_the_acceptance_on_the_real_sample(matrix_sample):
         assert r.inliers >= settings.min_inliers and np.isfinite(r.inlier_error_px)
         # ground_H_img composes ref_H_img with the reference's ground homography.
         ref = dataset.reference_camera(view)
-        np.testing.assert_allclose(r.ground_H_img / r.ground_H_img[2, 2],
-                                   (ref.ground_H_img() @ r.ref_H_img) / (ref.ground_H_img() @ r.ref_H_img)[2, 2],
-                                   rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(
+            r.ground_H_img / r.ground_H_img[2, 2],
+            (ref.ground_H_img() @ r.ref_H_img) / (ref.ground_H_img() @ r.ref_H_img)[2, 2],
+            rtol=1e-9,
+            atol=1e-12,
+        )
 
 
 def test_error_metric_is_zero_for_the_truth_and_grows_with_a_shift(matrix_sample):
@@ -99,14 +104,15 @@ def test_rekeyed_registrar_returns_to_the_original_reference(matrix_sample):
     dataset = MatrixDataset(matrix_sample)
     ref = dataset.reference_camera('D2')
     settings = RegisterSettings(rekey_after=1, rekey_confidence=1.01, good_confidence=0.0, retry_reference_every=2)
-    registrar = Registrar(settings, dataset.reference_image('D2'), ref, dataset.area,
-                          'D2/reference')
+    registrar = Registrar(settings, dataset.reference_image('D2'), ref, dataset.area, 'D2/reference')
 
     def register(frame):
         r = registrar.register(dataset.load_image('D2', frame), frame)
         assert r.ok, r.message
-        assert homography_error_px(r.ref_H_img, dataset.camera('D2', frame), ref, dataset.area,
-                                   settings.exclude_boxes) < 1.5
+        assert (
+            homography_error_px(r.ref_H_img, dataset.camera('D2', frame), ref, dataset.area, settings.exclude_boxes)
+            < 1.5
+        )
         return r
 
     assert 're-keyed' in register(0).message  # every frame is weak (rekey_confidence > 1)

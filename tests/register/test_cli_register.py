@@ -20,15 +20,24 @@ def _raw_projection(matrix_sample, drone, frame, world_file):
 
 
 def test_cli_writes_registrations_in_the_file_frame(matrix_sample, tmp_path, capsys):
-    assert main(['register', str(matrix_sample), '--out', str(tmp_path), '--views', 'D3', 'D8',
-                 '--max-frames', '2']) == 0
+    assert (
+        main(['register', str(matrix_sample), '--out', str(tmp_path), '--views', 'D3', 'D8', '--max-frames', '2']) == 0
+    )
     folder = tmp_path / 'registration'
     names = sorted(p.name for p in folder.glob('Drone*.json'))
     assert names == ['Drone3_0000.json', 'Drone3_0001.json', 'Drone8_0000.json', 'Drone8_0001.json']
     for drone, frame in ((3, 0), (8, 1)):
         rec = json.loads((folder / f'Drone{drone}_{frame:04d}.json').read_text())
-        assert {'H_cur_to_ref', 'H_img_to_ground', 'confidence', 'matches', 'inliers', 'status', 'backend',
-                'seconds'} <= set(rec)
+        assert {
+            'H_cur_to_ref',
+            'H_img_to_ground',
+            'confidence',
+            'matches',
+            'inliers',
+            'status',
+            'backend',
+            'seconds',
+        } <= set(rec)
         assert rec['status'] == 'ok' and rec['backend'] == 'sift' and rec['seconds'] > 0
         # Raw image pixels of known file-world ground points map back to those points.
         gx, gy = np.meshgrid(np.arange(2.0, 29.0, 1.0), np.arange(2.0, 29.0, 1.0))
@@ -58,8 +67,10 @@ def test_cli_png_writes_every_frame_and_takes_the_scene_from_a_simulated_folder(
     out = capsys.readouterr().out
     # The simple variant has no block: nothing to pass on the command line, the folder says so.
     assert '0 obstacle box(es)' in out and 'registered 2/2 images' in out
-    assert sorted(p.name for p in (tmp_path / 'out/registration/overlay').glob('*.png')) == \
-        ['Drone2_0000.png', 'Drone2_0001.png']
+    assert sorted(p.name for p in (tmp_path / 'out/registration/overlay').glob('*.png')) == [
+        'Drone2_0000.png',
+        'Drone2_0001.png',
+    ]
 
 
 def test_cli_rejects_unknown_views_and_non_matrix_folders(matrix_sample, tmp_path, capsys):

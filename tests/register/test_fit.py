@@ -37,11 +37,14 @@ def test_nan_coordinates_and_too_few_points_fail():
     assert 'need 4' in fit_homography(src[:3], src[:3]).reason
 
 
-@pytest.mark.parametrize('H, words', [
-    (np.full((3, 3), np.nan), 'NaN'),
-    (np.array([[1, 0, 0], [0, 1, 0], [0, 0, 0.0]]), 'H[2,2] = 0'),
-    (np.array([[1, 2, 3], [2, 4, 6], [0, 0, 1.0]]), 'singular'),
-])
+@pytest.mark.parametrize(
+    'H, words',
+    [
+        (np.full((3, 3), np.nan), 'NaN'),
+        (np.array([[1, 0, 0], [0, 1, 0], [0, 0, 0.0]]), 'H[2,2] = 0'),
+        (np.array([[1, 2, 3], [2, 4, 6], [0, 0, 1.0]]), 'singular'),
+    ],
+)
 def test_invalid_homographies_are_named(H, words):
     assert words in is_valid_homography(H)
     assert is_valid_homography(np.eye(3)) == ''
@@ -70,13 +73,14 @@ def test_plain_ransac_is_seeded_on_a_real_image_pair(real_matches):
     fits = [fit_homography(src, dst, 'ransac', 3.0, seed=seed) for seed in range(10)]
     assert all(f.reason == '' for f in fits)
     again = fit_homography(src, dst, 'ransac', 3.0, seed=3)
-    np.testing.assert_array_equal(again.H, fits[3].H)               # same seed, same H
+    np.testing.assert_array_equal(again.H, fits[3].H)  # same seed, same H
     np.testing.assert_array_equal(again.inliers, fits[3].inliers)
     distinct = {f.H.tobytes() for f in fits}
     assert len(distinct) >= 5, f'only {len(distinct)} different homographies from 10 seeds'
     # Different samples, one scene: the homographies agree on where the image centre goes (a few pixels).
     centre = np.array([[[960.0, 540.0]]])
     import cv2
+
     mapped = np.array([cv2.perspectiveTransform(centre, f.H).ravel() for f in fits])
     assert np.ptp(mapped, axis=0).max() < 30.0
 

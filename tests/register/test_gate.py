@@ -18,8 +18,7 @@ from matrix_core.register.registrar import Registrar
 from matrix_core.register.settings import MATRIX_BLOCK, RegisterSettings
 
 FACADE = dict(contrast_threshold=0.04, ground_only=False, scale=0.5, rekey_after=0)
-NO_GATE = dict(gate_max_shape_error=1e9, gate_max_area_ratio=1e9, gate_max_height_change_m=1e9,
-               gate_max_step_m=1e9)
+NO_GATE = dict(gate_max_shape_error=1e9, gate_max_area_ratio=1e9, gate_max_height_change_m=1e9, gate_max_step_m=1e9)
 
 
 def _register(dataset, view, frame, **kwargs):
@@ -73,8 +72,19 @@ def test_gate_accepts_true_fits_from_few_noisy_points(matrix_sample):
         pts = patch[rng.choice(len(patch), 20, replace=False)]
         fit = fit_homography(cur.ground_to_img(pts) + rng.normal(0.0, 0.7, (len(pts), 2)), ref.ground_to_img(pts))
         errors.append(homography_error_px(fit.H, cur, ref, dataset.area, MATRIX_BLOCK))
-        args = (fit.H, ref.K, ref.img_H_ground(), ref.center, polygon, None, 1, s.gate_max_shape_error,
-                s.gate_max_area_ratio, s.gate_max_height_change_m, s.gate_max_step_m)
+        args = (
+            fit.H,
+            ref.K,
+            ref.img_H_ground(),
+            ref.center,
+            polygon,
+            None,
+            1,
+            s.gate_max_shape_error,
+            s.gate_max_area_ratio,
+            s.gate_max_height_change_m,
+            s.gate_max_step_m,
+        )
         fixed += check_registration(*args)[0] == ''
         aware += check_registration(*args, int(fit.inliers.sum()), s.gate_shape_inliers)[0] == ''
     assert np.median(errors) < 2.0, np.median(errors)  # noisy fits of the true homography
@@ -90,12 +100,23 @@ def test_gate_accepts_every_true_homography_of_the_sample(matrix_sample):
         previous = None
         for frame in dataset.frames:
             reason, cam = check_registration(
-                gt_cur_to_ref(dataset.camera(view, frame), ref), ref.K, ref.img_H_ground(), ref.center, polygon,
-                previous, 1, s.gate_max_shape_error, s.gate_max_area_ratio, s.gate_max_height_change_m,
-                s.gate_max_step_m)
+                gt_cur_to_ref(dataset.camera(view, frame), ref),
+                ref.K,
+                ref.img_H_ground(),
+                ref.center,
+                polygon,
+                previous,
+                1,
+                s.gate_max_shape_error,
+                s.gate_max_area_ratio,
+                s.gate_max_height_change_m,
+                s.gate_max_step_m,
+            )
             assert reason == '', f'{view} frame {frame}: {reason}'
             # The implied camera is the real one.
-            np.testing.assert_allclose(cam.center, dataset.camera(view, frame).center, atol=1e-3)  # K differs in the 4th decimal
+            np.testing.assert_allclose(
+                cam.center, dataset.camera(view, frame).center, atol=1e-3
+            )  # K differs in the 4th decimal
             previous = cam.center
 
 
@@ -104,8 +125,9 @@ def test_gate_rejects_a_jump_from_the_previous_frame_and_a_flipped_homography(ma
     ref, cur = dataset.reference_camera('D4'), dataset.camera('D4', 1)
     polygon = ground_polygon(ref.img_H_ground(), visible_ground_grid(ref, dataset.area, 1.0, MATRIX_BLOCK))
     H = gt_cur_to_ref(cur, ref)
-    reason, _ = check_registration(H, ref.K, ref.img_H_ground(), ref.center, polygon,
-                                   previous_center=cur.center + [5.0, 0, 0], max_step_m=3.0)
+    reason, _ = check_registration(
+        H, ref.K, ref.img_H_ground(), ref.center, polygon, previous_center=cur.center + [5.0, 0, 0], max_step_m=3.0
+    )
     assert 'moved 5.00 m' in reason
     # A mirror image of the truth is no camera at all.
     mirror = np.diag([-1.0, 1.0, 1.0]) @ H

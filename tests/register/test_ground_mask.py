@@ -31,10 +31,14 @@ def test_reference_keeps_ground_features_only(matrix_sample):
 def test_block_faces_sky_and_outside_are_not_ground(matrix_sample):
     dataset = MatrixDataset(matrix_sample)
     cam = dataset.reference_camera('D3')
-    probes = np.array([[5.0, -5.0, 0.0],     # plaza ground
-                       [15.0, -15.0, 8.0],   # the block's body, 8 m up (its ground ray lands behind it)
-                       [15.0, -19.0, 0.0],   # ground right behind the block: hidden
-                       [-8.0, -15.0, 0.0]])  # ground outside the area
+    probes = np.array(
+        [
+            [5.0, -5.0, 0.0],  # plaza ground
+            [15.0, -15.0, 8.0],  # the block's body, 8 m up (its ground ray lands behind it)
+            [15.0, -19.0, 0.0],  # ground right behind the block: hidden
+            [-8.0, -15.0, 0.0],
+        ]
+    )  # ground outside the area
     uv = cam.project(probes)
     assert np.all(cam.in_image(uv))
     keep = ground_pixels(cam, np.vstack([uv, [[960.0, 0.0]]]), dataset.area, 0.0, MATRIX_BLOCK)
@@ -66,10 +70,14 @@ def test_block_close_above_the_camera_hides_only_what_is_behind_it(matrix_sample
     hidden_by_block = np.array([[20.0, -15.0], [25.0, -14.0], [29.0, -16.0]])
     assert np.all(cam.in_image(cam.ground_to_img(hidden_by_block)))  # in view, so the block is why
     # The same per-ray test decides which reference pixels are ground features.
-    probes = np.array([[5.0, -15.0, 0.0],    # ground in front of the block
-                       [10.0, -12.0, 0.0],   # ground in front of the block
-                       [12.5, -15.0, 5.0],   # the block's front face
-                       [20.0, -15.0, 0.0]])  # ground behind the block
+    probes = np.array(
+        [
+            [5.0, -15.0, 0.0],  # ground in front of the block
+            [10.0, -12.0, 0.0],  # ground in front of the block
+            [12.5, -15.0, 5.0],  # the block's front face
+            [20.0, -15.0, 0.0],
+        ]
+    )  # ground behind the block
     keep = ground_pixels(cam, cam.project(probes), dataset.area, 0.0, MATRIX_BLOCK)
     assert keep.tolist() == [True, True, False, False]
 

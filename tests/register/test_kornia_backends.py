@@ -75,7 +75,7 @@ def test_kornia_mask_keeps_the_features_inside_it(offline_torch_home, matrix_sam
     backend = make_backend(RegisterSettings(backend='gftt_affnet_sift', scale=0.25))
     everywhere = backend.extract(image, 2000)
     mask = np.zeros((270, 480), bool)
-    mask[135:] = True   # the lower half of the 480x270 working image
+    mask[135:] = True  # the lower half of the 480x270 working image
     inside = backend.extract(image, 2000, mask)
     assert 0 < len(inside) < len(everywhere)
     assert np.all(inside.xy[:, 1] >= (135 - 0.5) / 0.25 - 0.5 - 2)

@@ -61,16 +61,21 @@ def test_empty_and_tiny_inputs_give_no_matches():
 
 def _reference_brute(a, b, ratio):
     """The definition, with OpenCV's brute-force matcher run both ways (what 'brute' computed before)."""
+
     def knn2(query, train):
         pairs = cv2.BFMatcher(cv2.NORM_L2).knnMatch(query, train, k=2)
-        return (np.array([m[0].trainIdx for m in pairs]), np.array([m[0].distance for m in pairs]),
-                np.array([m[1].distance for m in pairs]))
+        return (
+            np.array([m[0].trainIdx for m in pairs]),
+            np.array([m[0].distance for m in pairs]),
+            np.array([m[1].distance for m in pairs]),
+        )
+
     ab, ab1, ab2 = knn2(a, b)
     ba, ba1, ba2 = knn2(b, a)
     return {(i, j) for i, j in enumerate(ab) if ab1[i] < ratio * ab2[i] and ba[j] == i and ba1[j] < ratio * ba2[j]}
 
 
-@pytest.mark.parametrize('block', [matching.BLOCK, 97])   # 97: many blocks, the last one short
+@pytest.mark.parametrize('block', [matching.BLOCK, 97])  # 97: many blocks, the last one short
 def test_exact_matching_of_real_sift_features_equals_opencv_brute_force(matrix_sample, monkeypatch, block):
     # Real descriptors (a drone frame and its reference, as the registrar matches them) have many close
     # candidates: the one-matrix search must find the same neighbours both ways as the definition.
@@ -80,7 +85,7 @@ def test_exact_matching_of_real_sift_features_equals_opencv_brute_force(matrix_s
     cur = sift.extract(cv2.imread(str(dataset.image_path('D3', 2))), 4000).desc
     ref = sift.extract(dataset.reference_image('D3'), 16000).desc
     pairs = {tuple(p) for p in match_symmetric(cur, ref, 0.8, 'brute')}
-    assert len(pairs) > 50   # a real registration's worth, so the comparison means something
+    assert len(pairs) > 50  # a real registration's worth, so the comparison means something
     assert pairs == _reference_brute(cur, ref, 0.8)
 
 

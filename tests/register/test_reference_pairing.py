@@ -13,7 +13,7 @@ def test_image_then_its_camera_info_makes_the_reference_and_releases_the_held():
     p = ReferencePairing(max_pending=5)
     assert kinds(p.image(1 * S, 'a')) == [(HOLD, S)]
     assert kinds(p.image(2 * S, 'b')) == [(HOLD, 2 * S)]
-    assert p.camera_info(3 * S, 'info3') == []            # no image of that stamp yet
+    assert p.camera_info(3 * S, 'info3') == []  # no image of that stamp yet
     ref = p.camera_info(2 * S, 'info2')
     assert kinds(ref) == [(REFERENCE, 2 * S)] and ref[0].image == 'b' and ref[0].camera_info == 'info2'
     after = p.started_with(2 * S)

@@ -44,7 +44,7 @@ def test_predicted_region_follows_the_prediction_and_grows_by_the_margin():
     shifted = predicted_region(mask, np.array([[1, 0, 80.0], [0, 1, 40.0], [0, 0, 1]]), 0.25, 0.0)
     rows, cols = np.flatnonzero(shifted.any(axis=1)), np.flatnonzero(shifted.any(axis=0))
     assert (rows[0], rows[-1], cols[0], cols[-1]) == (90, 139, 180, 279)
-    grown = predicted_region(mask, np.eye(3), 0.25, 40.0)   # 10 reduced px on every side
+    grown = predicted_region(mask, np.eye(3), 0.25, 40.0)  # 10 reduced px on every side
     rows, cols = np.flatnonzero(grown.any(axis=1)), np.flatnonzero(grown.any(axis=0))
     assert (rows[0], rows[-1], cols[0], cols[-1]) == (90, 159, 190, 309)
 
@@ -72,8 +72,14 @@ def _run(dataset, view, settings=TRACK):
     out = []
     for frame in dataset.frames:
         r = registrar.register(dataset.load_image(view, frame), frame)
-        out.append((r, homography_error_px(r.ref_H_img, dataset.camera(view, frame), ref, dataset.area,
-                                           MATRIX_BLOCK) if r.ok else None))
+        out.append(
+            (
+                r,
+                homography_error_px(r.ref_H_img, dataset.camera(view, frame), ref, dataset.area, MATRIX_BLOCK)
+                if r.ok
+                else None,
+            )
+        )
     return registrar, out
 
 
@@ -95,11 +101,12 @@ def test_doubted_chains_anchor_within_the_predicted_ground(dataset):
 def test_a_wrong_prediction_falls_back_to_the_whole_image(dataset):
     registrar, _ = _run(dataset, 'D2')
     sky = np.zeros((270, 480), bool)
-    sky[:40] = True   # where the reference's ground is not: nothing there registers
+    sky[:40] = True  # where the reference's ground is not: nothing there registers
     r = registrar._register_full(dataset.load_image('D2', 4), 4, time.perf_counter(), sky)
     assert r.ok and 'not registered within the predicted ground' in r.message, r.message
-    error = homography_error_px(r.ref_H_img, dataset.camera('D2', 4), dataset.reference_camera('D2'), dataset.area,
-                                MATRIX_BLOCK)
+    error = homography_error_px(
+        r.ref_H_img, dataset.camera('D2', 4), dataset.reference_camera('D2'), dataset.area, MATRIX_BLOCK
+    )
     assert error < 1.0
 
 

@@ -32,10 +32,12 @@ def sequences(tmp_path_factory):
     def get(variant: str) -> MatrixDataset:
         if variant not in cache:
             out = tmp_path_factory.mktemp('register_sim') / variant
-            simulate(SimulateSettings(config=variant, frames=FRAMES, seed=SEED, out=str(out), fast=True),
-                     progress=False)
+            simulate(
+                SimulateSettings(config=variant, frames=FRAMES, seed=SEED, out=str(out), fast=True), progress=False
+            )
             cache[variant] = MatrixDataset(out)
         return cache[variant]
+
     return get
 
 
@@ -46,8 +48,10 @@ def test_simulated_sequence_meets_the_acceptance(variant, sequences):
     dataset = sequences(variant)
     assert len(dataset.frames) == FRAMES and dataset.reference_camera('D1').width == 640
     run = acceptance_run(dataset, views=VIEWS[variant])
-    figures = (f"{variant}: {run['pairs'] - len(run['failed'])}/{run['pairs']} registered, error median "
-               f"{run['error_px_median']:.2f} / max {run['error_px_max']:.2f} full-res-equivalent px")
+    figures = (
+        f"{variant}: {run['pairs'] - len(run['failed'])}/{run['pairs']} registered, error median "
+        f"{run['error_px_median']:.2f} / max {run['error_px_max']:.2f} full-res-equivalent px"
+    )
     print(figures)
     assert run['pairs'] == 2 * FRAMES
     assert not run['failed'], f"{figures}; failed: {run['failed']}"
@@ -67,12 +71,13 @@ def test_registration_that_tracks_meets_the_acceptance(variant, tmp_path):
     0.34 px at 1920x1080). So this test renders the sequence at full size (about 1.5 minutes)."""
     cv2.setNumThreads(1)
     out = tmp_path / variant
-    simulate(SimulateSettings(config=variant, frames=FRAMES, seed=SEED, out=str(out), image_ext='.jpg'),
-             progress=False)
+    simulate(SimulateSettings(config=variant, frames=FRAMES, seed=SEED, out=str(out), image_ext='.jpg'), progress=False)
     run = acceptance_run(MatrixDataset(out), RegisterSettings(mode='track'), views=VIEWS[variant])
-    figures = (f"{variant} track: {run['pairs'] - len(run['failed'])}/{run['pairs']} registered, "
-               f"{run['tracked']} by flow, {run['anchors_by_flow']} anchored by flow, error median {run['error_px_median']:.2f} / max "
-               f"{run['error_px_max']:.2f} full-res-equivalent px")
+    figures = (
+        f"{variant} track: {run['pairs'] - len(run['failed'])}/{run['pairs']} registered, "
+        f"{run['tracked']} by flow, {run['anchors_by_flow']} anchored by flow, error median {run['error_px_median']:.2f} / max "
+        f"{run['error_px_max']:.2f} full-res-equivalent px"
+    )
     print(figures)
     assert not run['failed'] and run['pairs'] == 2 * FRAMES, f"{figures}; failed: {run['failed']}"
     assert run['tracked'] >= FRAMES, figures  # most frames by flow, not by features

@@ -37,8 +37,11 @@ def _run(dataset, settings, view, images):
     out = []
     for frame, image in images:
         r = registrar.register(image, frame)
-        error = homography_error_px(r.ref_H_img, dataset.camera(view, frame), ref, dataset.area,
-                                    MATRIX_BLOCK) if r.ok else None
+        error = (
+            homography_error_px(r.ref_H_img, dataset.camera(view, frame), ref, dataset.area, MATRIX_BLOCK)
+            if r.ok
+            else None
+        )
         out.append((r, error))
     return out
 
@@ -159,10 +162,17 @@ def test_the_refinement_repeats_until_a_poor_prediction_converges(dataset, monke
     off = np.array([[1.0, 0, 7], [0, 1, -3], [0, 0, 1]])
     errors = {}
     for refine_scale in (TRACK.scale, TRACK.track_refine_scale):
-        tracker = FlowTracker(TRACK.scale, TRACK.track_corners, TRACK.ransac_threshold_px,
-                              refine_scale=refine_scale)
-        reference = tracker.anchor(tracker.reduce(dataset.reference_image('D6')), ref, np.eye(3), 'D6/reference',
-                                   500, dataset.area, 0.0, MATRIX_BLOCK)
+        tracker = FlowTracker(TRACK.scale, TRACK.track_corners, TRACK.ransac_threshold_px, refine_scale=refine_scale)
+        reference = tracker.anchor(
+            tracker.reduce(dataset.reference_image('D6')),
+            ref,
+            np.eye(3),
+            'D6/reference',
+            500,
+            dataset.area,
+            0.0,
+            MATRIX_BLOCK,
+        )
         state = TrackState(reference.anchor, reference.images, reference.corners, off)
         for passes in (1, flow_tracking.REFINE_PASSES):
             monkeypatch.setattr(flow_tracking, 'REFINE_PASSES', passes)

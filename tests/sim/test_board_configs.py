@@ -29,7 +29,7 @@ def test_calibration_boards_match_the_simulator(variant):
     calib_corners = np.concatenate([b.corners_world() for b in calib])
     key = lambda pts: sorted(map(tuple, np.round(pts, 6)))  # noqa: E731
     assert key(sim_corners) == key(calib_corners)
-    for board in calib:   # every square of the board, by its centre
+    for board in calib:  # every square of the board, by its centre
         a, b = np.meshgrid(np.arange(board.nx + 1), np.arange(board.ny + 1))
         centres = board.points(a.ravel() - 0.5, b.ravel() - 0.5)
         light = board.cell_sign(a.ravel(), b.ravel()) > 0

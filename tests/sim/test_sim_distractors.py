@@ -101,8 +101,9 @@ def test_distractors_are_never_annotated(sim):
         img, ids = sim.renderer.render(sim.camera(k), None)
         assert not ids.any()
     plain = Simulation(_plain(sim.config), seed=21, width=640, height=360)
-    assert not np.array_equal(plain.renderer.render(plain.camera(0), None)[0],
-                              sim.renderer.render(sim.camera(0), None)[0])
+    assert not np.array_equal(
+        plain.renderer.render(plain.camera(0), None)[0], sim.renderer.render(sim.camera(0), None)[0]
+    )
 
 
 def test_annotated_people_are_seen_and_boxes_hold_their_foot_point(sim):
@@ -113,8 +114,14 @@ def test_annotated_people_are_seen_and_boxes_hold_their_foot_point(sim):
     for k in range(0, len(sim.views), 2):
         cam, _, _, visible = sim.render_view(k)
         for n in np.flatnonzero(visible):
-            alone = People(p.ids[n:n + 1], p.positions[n:n + 1], p.heights[n:n + 1], p.colors[n:n + 1],
-                           p.leg_radius, p.body_radius)
+            alone = People(
+                p.ids[n : n + 1],
+                p.positions[n : n + 1],
+                p.heights[n : n + 1],
+                p.colors[n : n + 1],
+                p.leg_radius,
+                p.body_radius,
+            )
             _, ids = sim.renderer.render(cam, alone)
             assert (ids == p.ids[n] + 1).sum() > 0, f'view {k}: person {p.ids[n]} hidden by a distractor'
             box = annotation_box(cam, p.positions[n])

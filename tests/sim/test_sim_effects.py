@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 from matrix_core.sim import camera_effects
-from matrix_core.sim.camera_effects import (downsample, effective_jpeg_quality, jpeg_round_trip,
-                                            supersampled_camera)
+from matrix_core.sim.camera_effects import downsample, effective_jpeg_quality, jpeg_round_trip, supersampled_camera
 from matrix_core.sim.config import LightingConfig, load_scene_config, scene_config_from_dict
 from matrix_core.sim.lighting import DAY, UP, sample_lighting
 from matrix_core.sim.scene import board_corners
@@ -105,8 +104,13 @@ def test_supersampled_checkerboard_corners_stay_within_a_tenth_of_a_pixel(factor
             ok = cam.in_image(uv, margin=10)
             if ok.sum() < 50:
                 continue
-            found = cv2.cornerSubPix(gray, uv[ok].astype(np.float32).reshape(-1, 1, 2).copy(), (3, 3), (-1, -1),
-                                     (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 40, 0.001))
+            found = cv2.cornerSubPix(
+                gray,
+                uv[ok].astype(np.float32).reshape(-1, 1, 2).copy(),
+                (3, 3),
+                (-1, -1),
+                (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 40, 0.001),
+            )
             errors.append(np.linalg.norm(found.reshape(-1, 2) - uv[ok], axis=1))
     errors = np.concatenate(errors)
     assert len(errors) > 200

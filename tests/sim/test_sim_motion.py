@@ -19,9 +19,11 @@ def test_drone_motion_matches_real_statistics():
     speed = np.linalg.norm(np.diff(centers, axis=0), axis=2) / 0.5
     rot = [rotation_angle_deg(a.R, b.R) for f0, f1 in zip(cams, cams[1:]) for a, b in zip(f0, f1)]
     tilt = np.array([[c.tilt_deg for c in frame] for frame in cams])
-    print(f'speed median {np.median(speed):.2f} m/s, rotation median {np.median(rot):.1f} deg/step, '
-          f'tilt {tilt.min():.0f}..{tilt.max():.0f} deg, '
-          f'height {centers[..., 2].min():.2f}..{centers[..., 2].max():.2f} m')
+    print(
+        f'speed median {np.median(speed):.2f} m/s, rotation median {np.median(rot):.1f} deg/step, '
+        f'tilt {tilt.min():.0f}..{tilt.max():.0f} deg, '
+        f'height {centers[..., 2].min():.2f}..{centers[..., 2].max():.2f} m'
+    )
     assert 0.4 <= np.median(speed) <= 0.9 and speed.max() <= 1.5 + 1e-6
     assert 1.5 <= np.median(rot) <= 7.0
     assert 10.0 <= tilt.min() and tilt.max() <= 50.0

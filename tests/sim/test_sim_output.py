@@ -13,8 +13,20 @@ from matrix_core.datasets import open_dataset
 
 
 def _simulate(out, seed, config='simple', frames=3, extra=()):
-    argv = ['simulate', '--config', config, '--frames', str(frames), '--seed', str(seed), '--out', str(out),
-            '--fast', 'true', *extra]
+    argv = [
+        'simulate',
+        '--config',
+        config,
+        '--frames',
+        str(frames),
+        '--seed',
+        str(seed),
+        '--out',
+        str(out),
+        '--fast',
+        'true',
+        *extra,
+    ]
     assert main(argv) == 0
     return out
 
@@ -29,8 +41,9 @@ def test_same_seed_gives_byte_identical_annotations(tmp_path):
     for frame in range(3):
         name = f'annotations_positions/{frame:04d}.json'
         assert (a / name).read_bytes() == (b / name).read_bytes()
-        assert (a / f'matchings/Pedestrians/3d_{frame:04d}.txt').read_bytes() == \
-            (b / f'matchings/Pedestrians/3d_{frame:04d}.txt').read_bytes()
+        assert (a / f'matchings/Pedestrians/3d_{frame:04d}.txt').read_bytes() == (
+            b / f'matchings/Pedestrians/3d_{frame:04d}.txt'
+        ).read_bytes()
     last = 'annotations_positions/0002.json'
     assert (a / last).read_bytes() != (c / last).read_bytes()
 

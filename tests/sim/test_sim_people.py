@@ -9,8 +9,7 @@ from matrix_core.sim.appearance import person_looks
 from matrix_core.sim.config import VARIANTS, CrowdConfig, load_scene_config
 from matrix_core.sim.crowd import ReplayCrowd
 from matrix_core.sim.ground_truth import CYLINDER_HEIGHT_M, annotation_box
-from matrix_core.sim.person_model import (PARTS, STRIDE, SWING_DEG, body_rings, gait_phase, max_reach,
-                                          swing_amplitude)
+from matrix_core.sim.person_model import PARTS, STRIDE, SWING_DEG, body_rings, gait_phase, max_reach, swing_amplitude
 from matrix_core.sim.render import People
 from matrix_core.sim.sequence import Simulation
 from matrix_core.sim.visibility import line_of_sight
@@ -38,9 +37,16 @@ def _random_people(rng, n, cam, walking=True):
     """``n`` people standing on random ground points seen in the central part of ``cam``'s image."""
     uv = np.c_[rng.uniform(0.15, 0.85, n) * cam.width, rng.uniform(0.35, 0.9, n) * cam.height]
     pos = cam.backproject_to_ground(uv)[:, :2]
-    return People(np.arange(n), pos, rng.uniform(1.5, 1.95, n), person_looks(rng, n)[0],
-                  headings=rng.uniform(-np.pi, np.pi, n), phases=rng.uniform(0, 2 * np.pi, n),
-                  swings=np.full(n, np.radians(SWING_DEG)) if walking else None, dress=rng.random(n) < 0.3)
+    return People(
+        np.arange(n),
+        pos,
+        rng.uniform(1.5, 1.95, n),
+        person_looks(rng, n)[0],
+        headings=rng.uniform(-np.pi, np.pi, n),
+        phases=rng.uniform(0, 2 * np.pi, n),
+        swings=np.full(n, np.radians(SWING_DEG)) if walking else None,
+        dress=rng.random(n) < 0.3,
+    )
 
 
 @pytest.mark.parametrize('walking', [True, False])
@@ -59,14 +65,25 @@ def test_drawn_body_within_bounded_annotation_box_and_foot_at_bottom(sim, walkin
         people = _random_people(rng, 8, cam, walking)
         vis = line_of_sight(cam, people.positions, sim.scene.occluders)
         for j in np.flatnonzero(vis):
-            one = People(np.array([0]), people.positions[j:j + 1], people.heights[j:j + 1],
-                         people.colors[j:j + 1], headings=people.headings[j:j + 1],
-                         phases=people.phases[j:j + 1], swings=None if people.swings is None
-                         else people.swings[j:j + 1], dress=people.dress[j:j + 1])
+            one = People(
+                np.array([0]),
+                people.positions[j : j + 1],
+                people.heights[j : j + 1],
+                people.colors[j : j + 1],
+                headings=people.headings[j : j + 1],
+                phases=people.phases[j : j + 1],
+                swings=None if people.swings is None else people.swings[j : j + 1],
+                dress=people.dress[j : j + 1],
+            )
             _, ids = sim.renderer.render(cam, one)
             vs, us = np.nonzero(ids == 1)
-            if len(vs) == 0 or us.min() == 0 or vs.min() == 0 or us.max() == cam.width - 1 \
-                    or vs.max() == cam.height - 1:
+            if (
+                len(vs) == 0
+                or us.min() == 0
+                or vs.min() == 0
+                or us.max() == cam.width - 1
+                or vs.max() == cam.height - 1
+            ):
                 continue  # (partly) outside the image or hidden by the block
             xy, h = people.positions[j], people.heights[j]
             reach, top = max_reach(h)
@@ -74,8 +91,7 @@ def test_drawn_body_within_bounded_annotation_box_and_foot_at_bottom(sim, walkin
             assert bx0 - PX <= us.min() and us.max() <= bx1 + PX, f'view {k} person {j}: too wide'
             assert by0 - PX <= vs.min(), f'view {k} person {j}: too tall'
             box = annotation_box(cam, xy)
-            inside = ((us >= box.xmin - PX) & (us <= box.xmax + PX) & (vs >= box.ymin - PX)
-                      & (vs <= box.ymax + PX))
+            inside = (us >= box.xmin - PX) & (us <= box.xmax + PX) & (vs >= box.ymin - PX) & (vs <= box.ymax + PX)
             inside_share.append(inside.mean())
             foot_v = cam.project(np.array([[xy[0], xy[1], 0.0]]))[0, 1]
             low = ground_v.max() if walking else _cylinder_box(cam, xy, 0.12, 0.0)[4].max()

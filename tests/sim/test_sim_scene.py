@@ -72,8 +72,12 @@ def test_person_behind_block_is_invisible_and_not_drawn(sim_fast):
         cam = sim_fast.camera(k)
         away = block_c - cam.center[:2]
         spot = block_c + away / np.linalg.norm(away) * (cfg.block.size[0] / 2 + 1.0)
-        people = People(np.array([0, 1]), np.array([spot, block_c - away / np.linalg.norm(away) * 5.0]),
-                        np.array([1.8, 1.8]), sim_fast.colors[:2])
+        people = People(
+            np.array([0, 1]),
+            np.array([spot, block_c - away / np.linalg.norm(away) * 5.0]),
+            np.array([1.8, 1.8]),
+            sim_fast.colors[:2],
+        )
         _, ids = sim_fast.renderer.render(cam, people)
         vis = line_of_sight(cam, people.positions, sim_fast.scene.occluders)
         assert not vis[0] and not (ids == 1).any(), f'view {k}: person behind the block is seen'
@@ -81,8 +85,7 @@ def test_person_behind_block_is_invisible_and_not_drawn(sim_fast):
 
 
 def _pnp_error(K, xyz, uv, cam):
-    ok, rvec, tvec = cv2.solvePnP(xyz.astype(np.float64), uv.astype(np.float64), K, None,
-                                  flags=cv2.SOLVEPNP_ITERATIVE)
+    ok, rvec, tvec = cv2.solvePnP(xyz.astype(np.float64), uv.astype(np.float64), K, None, flags=cv2.SOLVEPNP_ITERATIVE)
     assert ok
     R = cv2.Rodrigues(rvec)[0]
     return rotation_angle_deg(R, cam.R), float(np.linalg.norm(-R.T @ tvec.ravel() - cam.center))
@@ -115,7 +118,8 @@ def test_pnp_on_true_and_detected_board_corners_recovers_pose():
             x1, y1 = np.ceil(uv[inside].max(0) + 40).astype(int)
             gray = cv2.cvtColor(img[y0:y1, x0:x1], cv2.COLOR_BGR2GRAY)
             found, corners, _ = cv2.findChessboardCornersSBWithMeta(
-                gray, (5, 5), cv2.CALIB_CB_LARGER | cv2.CALIB_CB_EXHAUSTIVE | cv2.CALIB_CB_ACCURACY)
+                gray, (5, 5), cv2.CALIB_CB_LARGER | cv2.CALIB_CB_EXHAUSTIVE | cv2.CALIB_CB_ACCURACY
+            )
             if not found or len(corners) < 100:
                 continue
             det = corners.reshape(-1, 2) + [x0, y0]

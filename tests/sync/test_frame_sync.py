@@ -18,7 +18,7 @@ def test_complete_frame_is_emitted_when_last_stream_arrives():
     (frame,) = sync.add('D2/image', 1.0, 'b', now=0.2)
     assert frame.reason == 'complete' and frame.missing == [] and frame.stamp == 1.0
     assert frame.items == {'D1/image': 'a', 'D2/image': 'b', 'D3/image': 'c'}
-    assert frame.first_arrival == 0.0   # when its first item came: how long the frame waited (fuse diagnostics)
+    assert frame.first_arrival == 0.0  # when its first item came: how long the frame waited (fuse diagnostics)
 
 
 def test_stopped_stream_times_out_with_the_views_that_arrived():
@@ -67,28 +67,30 @@ def test_duplicated_and_out_of_order_stamps_never_mix_frames():
     than the last emitted frame is refused and counted, and a frame never takes an item of another stamp."""
     sync = make(timeout=100)
     sync.add('D1/image', 1.0, 'a', now=0)
-    sync.add('D1/image', 1.0, 'a again', now=0)     # duplicate while the frame waits
+    sync.add('D1/image', 1.0, 'a again', now=0)  # duplicate while the frame waits
     sync.add('D2/image', 1.0, 'b', now=0)
     (frame,) = sync.add('D3/image', 1.0, 'c', now=0)
     assert frame.items == {'D1/image': 'a again', 'D2/image': 'b', 'D3/image': 'c'}
-    assert sync.add('D2/image', 1.0, 'b again', now=0) == [] and sync.late_items == 1   # after its frame
+    assert sync.add('D2/image', 1.0, 'b again', now=0) == [] and sync.late_items == 1  # after its frame
     sync.add('D1/image', 2.0, 'x', now=0)
-    sync.add('D1/image', 1.5, 'y', now=0)           # out of order, still pending: a frame of its own
+    sync.add('D1/image', 1.5, 'y', now=0)  # out of order, still pending: a frame of its own
     assert sync.pending_stamps == [1.5, 2.0]
     out = [f for s in STREAMS[1:] for f in sync.add(s, 2.0, s, now=0)]
     assert [(f.stamp, f.reason, sorted(f.items)) for f in out] == [
-        (1.5, 'superseded', ['D1/image']), (2.0, 'complete', STREAMS)]
+        (1.5, 'superseded', ['D1/image']),
+        (2.0, 'complete', STREAMS),
+    ]
     assert sync.add('D3/image', 1.5, 'late', now=0) == [] and sync.late_items == 2
 
 
 def test_a_stopped_drone_resumes():
     sync = make(timeout=0.5)
     for k, stamp in enumerate((1.0, 1.5, 2.0)):
-        for s in STREAMS[:2]:                          # D3 stopped
+        for s in STREAMS[:2]:  # D3 stopped
             sync.add(s, stamp, s, now=10.0 + k)
         (frame,) = sync.poll(10.5 + k)
         assert frame.reason == 'timeout' and frame.missing == ['D3/image']
-    out = [f for s in STREAMS for f in sync.add(s, 2.5, s, now=13.0)]   # D3 is back
+    out = [f for s in STREAMS for f in sync.add(s, 2.5, s, now=13.0)]  # D3 is back
     assert [(f.stamp, f.reason, f.missing) for f in out] == [(2.5, 'complete', [])]
 
 
@@ -97,8 +99,8 @@ def test_time_going_back_starts_a_new_sequence_only_beyond_restart_gap():
     for s in STREAMS:
         sync.add(s, 10.0, s, now=0)
     sync.add('D1/image', 10.5, 'pending', now=0)
-    assert sync.add('D1/image', 9.0, 'late', now=0) == [] and sync.late_items == 1   # 1 s back: late
-    out = sync.add('D1/image', 1.0, 'new run', now=0)                                 # 9 s back: a restart
+    assert sync.add('D1/image', 9.0, 'late', now=0) == [] and sync.late_items == 1  # 1 s back: late
+    out = sync.add('D1/image', 1.0, 'new run', now=0)  # 9 s back: a restart
     assert [(f.stamp, f.reason) for f in out] == [(10.5, 'restart')] and sync.restarts == 1
     assert sync.pending_stamps == [1.0]
     out = [f for s in STREAMS[1:] for f in sync.add(s, 1.0, s, now=0)]
@@ -112,8 +114,16 @@ def test_stamp_restart():
     from matrix_core.sync import StampRestart
 
     r = StampRestart(2.0)
-    assert [r.went_back(t) for t in (1.0, 5.0, 4.0, 3.5, 1.0, 1.5, 9.0, 6.9)] == \
-        [False, False, False, False, True, False, False, True]
+    assert [r.went_back(t) for t in (1.0, 5.0, 4.0, 3.5, 1.0, 1.5, 9.0, 6.9)] == [
+        False,
+        False,
+        False,
+        False,
+        True,
+        False,
+        False,
+        True,
+    ]
 
 
 def test_waiting_before_says_whether_an_earlier_frame_is_pending():
@@ -121,8 +131,8 @@ def test_waiting_before_says_whether_an_earlier_frame_is_pending():
     sync = make(stamp_tolerance=0.01)
     assert not sync.waiting_before(1.0)
     sync.add('D1/image', 1.0, 'a', now=0.0)
-    assert not sync.waiting_before(1.0) and not sync.waiting_before(1.005)   # the same frame, within tolerance
+    assert not sync.waiting_before(1.0) and not sync.waiting_before(1.005)  # the same frame, within tolerance
     assert sync.waiting_before(1.5) and not sync.waiting_before(0.5)
     sync.add('D2/image', 1.0, 'b', now=0.1)
-    sync.add('D3/image', 1.0, 'c', now=0.2)   # complete: emitted, nothing earlier waits any more
+    sync.add('D3/image', 1.0, 'c', now=0.2)  # complete: emitted, nothing earlier waits any more
     assert not sync.waiting_before(1.5)

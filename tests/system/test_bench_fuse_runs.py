@@ -10,8 +10,12 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_bench_fuse_runs_two_frames_per_phase():
-    run = subprocess.run([sys.executable, str(ROOT / 'scripts/bench_fuse.py'), '--frames', '2', '--cpu', '-1'],
-                         capture_output=True, text=True, timeout=300)
+    run = subprocess.run(
+        [sys.executable, str(ROOT / 'scripts/bench_fuse.py'), '--frames', '2', '--cpu', '-1'],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-3000:]
     assert 'throughput (lockstep)' in run.stdout and 'frames lost at 2.0 Hz' in run.stdout, run.stdout[-2000:]
     assert 'fuse node per frame (median s): decode' in run.stdout

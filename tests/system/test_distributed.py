@@ -24,17 +24,20 @@ from matrix_bringup.graph import BagFacts, GraphSettings
 from matrix_bringup.netns_harness import Hosts, namespaces, unavailable
 
 REASON = unavailable()
-pytestmark = [pytest.mark.ros, pytest.mark.slow,
-              pytest.mark.skipif(bool(REASON), reason=f'no network namespaces here: {REASON}')]
+pytestmark = [
+    pytest.mark.ros,
+    pytest.mark.slow,
+    pytest.mark.skipif(bool(REASON), reason=f'no network namespaces here: {REASON}'),
+]
 VIEWS, CUT = ['D1', 'D5'], 'D5'
-FRAMES = 14          # back and forth over the sample's 5 frames
-RATE = 0.5           # 1 s per frame: calib, register and fuse keep up on two loaded cores
+FRAMES = 14  # back and forth over the sample's 5 frames
+RATE = 0.5  # 1 s per frame: calib, register and fuse keep up on two loaded cores
 PERIOD = 0.5 / RATE  # wall seconds between frames
-LEAD = 30.0          # s from all hosts ready to the first frame: players took over 13 s to start at load 50
+LEAD = 30.0  # s from all hosts ready to the first frame: players took over 13 s to start at load 50
 
 
 def _stamp(k: int) -> float:
-    return round(1.0 + 0.5 * k, 6)   # the sequence clock of a written bag
+    return round(1.0 + 0.5 * k, 6)  # the sequence clock of a written bag
 
 
 def _wait(condition, timeout_s, what, procs):
@@ -59,21 +62,30 @@ def _ended_cleanly(alive, players, logs, tag) -> dict:
 
 def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
     bag = write_replay_bag(matrix_sample, tmp_path / 'bag', VIEWS, back_and_forth(5, FRAMES))
-    settings = GraphSettings(bag=str(bag), dataset=str(matrix_sample), views=VIEWS, lockstep=False, rate=RATE,
-                             sync_timeout=1.5, record=str(tmp_path / 'rec'))
+    settings = GraphSettings(
+        bag=str(bag),
+        dataset=str(matrix_sample),
+        views=VIEWS,
+        lockstep=False,
+        rate=RATE,
+        sync_timeout=1.5,
+        record=str(tmp_path / 'rec'),
+    )
     d = deployment(settings, BagFacts.read(str(bag), VIEWS))
     logs = tmp_path / 'logs'
     with Hosts(VIEWS, multicast=False) as hosts:
-        procs = start(d, hosts, logs, discovery='peers', image_probes=[CUT], captures=['D1'],
-                      player_lead_s=LEAD)
-        fused = lambda: {line['stamp']: line for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
-                         if line['kind'] == 'fuse'}
+        procs = start(d, hosts, logs, discovery='peers', image_probes=[CUT], captures=['D1'], player_lead_s=LEAD)
+        fused = lambda: {
+            line['stamp']: line
+            for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
+            if line['kind'] == 'fuse'
+        }
         _wait(lambda: _stamp(2) in fused(), 240, 'frame 2 fused (start-up and discovery)', procs)
         # discovery went unicast: nobody listens on the multicast port of the domain, the ground on its unicast
         ports = {h: hosts.udp_ports(h) for h in hosts.hosts}
         hosts.cut(CUT)
         cut_at = time.time()
-        time.sleep(5.0)   # what is tested: a 5 s outage
+        time.sleep(5.0)  # what is tested: a 5 s outage
         hosts.restore(CUT)
         restored_at = time.time()
         players = {label: p for label, p in procs.items() if label.endswith('bag_player')}
@@ -87,8 +99,8 @@ def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
     logs_text = _ended_cleanly(alive, players, logs, tag)
 
     domain = int(os.environ.get('ROS_DOMAIN_ID', '0'))
-    assert not any(7400 + 250 * domain in p for p in ports.values()), ports   # RTPS well-known ports
-    assert 7400 + 250 * domain + 10 in ports['ground'], ports   # the unicast discovery of participant 0
+    assert not any(7400 + 250 * domain in p for p in ports.values()), ports  # RTPS well-known ports
+    assert 7400 + 250 * domain + 10 in ports['ground'], ports  # the unicast discovery of participant 0
     # the drones announce themselves to the ground only: no drone found another, nothing crossed between them
     crossed = read_probe(logs / 'D1_capture.log')[-1]['streams']
     assert any(r['peer'] == 'ground' and r['stream'] == '/D1/link/image/compressed' for r in crossed), crossed
@@ -101,18 +113,20 @@ def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
     status = {line['stamp']: line for line in lines if line['kind'] == 'fuse'}
     published = {line['stamp']: line['t'] for line in read_probe(logs / f'{CUT}_probe.log') if line['kind'] == 'image'}
     stamps = [_stamp(k) for k in range(FRAMES)]
-    assert sorted(tracks) == stamps and tracks == sorted(tracks), tracks   # every frame once, in order
+    assert sorted(tracks) == stamps and tracks == sorted(tracks), tracks  # every frame once, in order
     views_used = [status[s]['views_used'] for s in stamps]
     # the frames whose D5 image left during the cut were fused with D1 alone; the diagnostics say why
     cut = [s for s in stamps if cut_at + 0.2 < published[s] < restored_at - 0.2]
     assert len(cut) >= 3, (cut_at, restored_at, published)
-    for s in cut:   # (the frame before the restore may get its homography late, resent: 'no image')
+    for s in cut:  # (the frame before the restore may get its homography late, resent: 'no image')
         assert status[s]['views_used'] == 1 and set(status[s]['missing']) == {CUT}, status[s]
         assert status[s]['missing'][CUT].startswith('missing: no image'), status[s]
     assert sum(status[s]['missing'][CUT] == 'missing: no image and no homography' for s in cut) >= 3
     # what the reliable homography stream resent after the restore was of frames already fused: refused
-    assert 'D5: geometry at t=' in logs_text['fuse.log'] and 'arrived after its frame was fused; ignored' in \
-        logs_text['fuse.log'], logs_text['fuse.log']
+    assert (
+        'D5: geometry at t=' in logs_text['fuse.log']
+        and 'arrived after its frame was fused; ignored' in logs_text['fuse.log']
+    ), logs_text['fuse.log']
     # back within 2 frames of the link returning: the third frame published after it, and all later ones
     after = [s for s in stamps if published[s] > restored_at]
     assert len(after) >= 4, (restored_at, published)
@@ -121,21 +135,24 @@ def test_link_cut_and_restored_mid_replay(matrix_sample, tmp_path):
 
 
 def test_throttled_link_and_fuse_restarted(matrix_sample, tmp_path):
-    frames, slow, rate_mbit = 45, 'D1', 4.0   # D1's images need 6 Mbit/s at 1 frame/s: it gets 4
+    frames, slow, rate_mbit = 45, 'D1', 4.0  # D1's images need 6 Mbit/s at 1 frame/s: it gets 4
     # (45 frames: a restarted fuse process took up to 26 s to load on two loaded cores)
     bag = write_replay_bag(matrix_sample, tmp_path / 'bag', VIEWS, back_and_forth(5, frames))
     # (a sync timeout of 2.5 s: one of D1's 0.75 MB images takes 1.6 s to cross at 4 Mbit/s)
-    settings = GraphSettings(bag=str(bag), dataset=str(matrix_sample), views=VIEWS, lockstep=False, rate=RATE,
-                             sync_timeout=2.5)
+    settings = GraphSettings(
+        bag=str(bag), dataset=str(matrix_sample), views=VIEWS, lockstep=False, rate=RATE, sync_timeout=2.5
+    )
     # D1's images may use 90 % of its link (the rest: geometry, diagnostics, discovery); D5's is not limited
     d = deployment(settings, BagFacts.read(str(bag), VIEWS), link_mbit={slow: 0.9 * rate_mbit})
     logs, other = tmp_path / 'logs', next(v for v in VIEWS if v != slow)
     with Hosts(VIEWS) as hosts:
         hosts.limit(slow, rate_mbit)
-        procs = start(d, hosts, logs, discovery='multicast', image_probes=[other],
-                      player_lead_s=LEAD)
-        fused = lambda: {line['stamp'] for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
-                         if line['kind'] == 'fuse'}
+        procs = start(d, hosts, logs, discovery='multicast', image_probes=[other], player_lead_s=LEAD)
+        fused = lambda: {
+            line['stamp']
+            for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
+            if line['kind'] == 'fuse'
+        }
         _wait(lambda: _stamp(3) in fused(), 240, 'frame 3 fused', procs)
         first_fuse = procs.pop('fuse')
         assert hosts.stop(first_fuse) == 0
@@ -153,8 +170,9 @@ def test_throttled_link_and_fuse_restarted(matrix_sample, tmp_path):
     lines = read_probe(logs / 'ground_probe.log')
     tracks = {line['stamp']: line for line in lines if line['kind'] == 'tracks'}
     status = {line['stamp']: line for line in lines if line['kind'] == 'fuse'}
-    published = {line['stamp']: line['t'] for line in read_probe(logs / f'{other}_probe.log')
-                 if line['kind'] == 'image'}
+    published = {
+        line['stamp']: line['t'] for line in read_probe(logs / f'{other}_probe.log') if line['kind'] == 'image'
+    }
     # throttled: D1's link_sender let a frame go only once the ones before had time to cross and dropped the
     # others whole at the sender, so the link's queue dropped no packet and the frames sent were fused with both
     # views (before link_sender the queue dropped packets of every frame: 1 frame in 30 arrived whole);
@@ -167,8 +185,14 @@ def test_throttled_link_and_fuse_restarted(matrix_sample, tmp_path):
     # the frames D1 did not send went out with D5 alone, saying why, as soon as D1's notice and geometry came:
     # fuse did not wait its sync timeout for an image D1 had said would not come
     dropped = {line['stamp'] for line in lines if line['kind'] == 'link' and line['outcome'] == 'dropped'}
-    told = [s for s in status if s in dropped and s in published and s in tracks
-            and status[s]['missing'].get(slow) == 'missing: no image: dropped at the sender (link budget)']
+    told = [
+        s
+        for s in status
+        if s in dropped
+        and s in published
+        and s in tracks
+        and status[s]['missing'].get(slow) == 'missing: no image: dropped at the sender (link budget)'
+    ]
     assert len(told) >= frames // 5, [status[s] for s in sorted(status)]
     waited = sorted(tracks[s]['t'] - published[s] for s in told)
     assert waited[len(waited) // 2] < settings.sync_timeout - 1.0, waited
@@ -194,15 +218,18 @@ def test_throttled_link_and_fuse_restarted(matrix_sample, tmp_path):
 def test_discovery_server_without_multicast(matrix_sample, tmp_path):
     frames, watched, other = 10, 'D1', 'D5'
     bag = write_replay_bag(matrix_sample, tmp_path / 'bag', VIEWS, back_and_forth(5, frames))
-    settings = GraphSettings(bag=str(bag), dataset=str(matrix_sample), views=VIEWS, lockstep=False, rate=RATE,
-                             sync_timeout=1.5)
+    settings = GraphSettings(
+        bag=str(bag), dataset=str(matrix_sample), views=VIEWS, lockstep=False, rate=RATE, sync_timeout=1.5
+    )
     d = deployment(settings, BagFacts.read(str(bag), VIEWS))
     logs = tmp_path / 'logs'
     with Hosts(VIEWS, multicast=False) as hosts:
-        procs = start(d, hosts, logs, discovery='server', image_probes=VIEWS, captures=[watched],
-                      player_lead_s=LEAD)
-        fused = lambda: {line['stamp'] for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
-                         if line['kind'] == 'fuse'}
+        procs = start(d, hosts, logs, discovery='server', image_probes=VIEWS, captures=[watched], player_lead_s=LEAD)
+        fused = lambda: {
+            line['stamp']
+            for line in read_probe(logs / 'ground_probe.log')  # noqa: E731
+            if line['kind'] == 'fuse'
+        }
         players = {label: p for label, p in procs.items() if label.endswith('bag_player')}
         _wait(lambda: all(p.poll() is not None for p in players.values()), 240, 'the players to finish', procs)
         _wait(lambda: _stamp(frames - 1) in fused(), 30, 'the last frame fused', procs)
@@ -213,13 +240,13 @@ def test_discovery_server_without_multicast(matrix_sample, tmp_path):
     _ended_cleanly(alive, players, logs, tag)
 
     domain = int(os.environ.get('ROS_DOMAIN_ID', '0'))
-    assert SERVER_PORT in ports['ground'], ports   # the server listens on the ground ...
-    assert not any(7400 + 250 * domain in p for p in ports.values()), ports   # ... and nobody on multicast
+    assert SERVER_PORT in ports['ground'], ports  # the server listens on the ground ...
+    assert not any(7400 + 250 * domain in p for p in ports.values()), ports  # ... and nobody on multicast
     lines = read_probe(logs / 'ground_probe.log')
     tracks = [line['stamp'] for line in lines if line['kind'] == 'tracks']
     status = {line['stamp']: line for line in lines if line['kind'] == 'fuse'}
     stamps = [_stamp(k) for k in range(frames)]
-    assert sorted(tracks) == stamps and tracks == sorted(tracks), tracks   # every frame once, in order
+    assert sorted(tracks) == stamps and tracks == sorted(tracks), tracks  # every frame once, in order
     # both drones found through the server: the images each published reached fuse (most of them: on a loaded
     # machine one may come after its sync timeout; frames also miss homographies computed too late)
     for view in VIEWS:
@@ -233,5 +260,8 @@ def test_discovery_server_without_multicast(matrix_sample, tmp_path):
     assert {('/D1/link/image/compressed', 'data'), ('/D1/homography', 'data')} <= up, crossed
     assert ('/D1/image/compressed', 'data') not in up, crossed
     assert not [r for r in crossed if r['stream'].startswith(f'/{other}/')], crossed
-    assert not [r for r in crossed if r['direction'] == 'down' and r['kind'] == 'data'
-                and r['stream'].endswith('image/compressed')], crossed
+    assert not [
+        r
+        for r in crossed
+        if r['direction'] == 'down' and r['kind'] == 'data' and r['stream'].endswith('image/compressed')
+    ], crossed

@@ -38,14 +38,18 @@ class Drones:
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         qos = qos_by_name('reliable')
-        self.images = {v: self.node.create_publisher(CompressedImage, f'/{v}/image/compressed', qos)
-                       for v in self.views}
+        self.images = {
+            v: self.node.create_publisher(CompressedImage, f'/{v}/image/compressed', qos) for v in self.views
+        }
         self.raw = {v: self.node.create_publisher(Image, f'/{v}/image_raw', qos) for v in self.views}
-        self.homs = {v: self.node.create_publisher(HomographyStamped, f'/{v}/homography', publisher_qos())
-                     for v in self.views}
+        self.homs = {
+            v: self.node.create_publisher(HomographyStamped, f'/{v}/homography', publisher_qos()) for v in self.views
+        }
         self.tracks, self.diags = {}, {}
-        self.outputs = [self.node.create_subscription(TrackArray, '/tracks', self._on_tracks, 50),
-                        self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 50)]
+        self.outputs = [
+            self.node.create_subscription(TrackArray, '/tracks', self._on_tracks, 50),
+            self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 50),
+        ]
 
     def _on_tracks(self, msg):
         self.tracks[round(stamp_to_seconds(msg.header.stamp), 3)] = msg
@@ -63,14 +67,28 @@ class Drones:
         subscriptions ``count`` publishers (0: the old node is gone). Both sides of the homography match are
         then complete: fuse subscribes a view's images only once its homography subscription has matched."""
         pubs = [*self.images.values(), *self.raw.values(), *self.homs.values()]
-        return self.spin_until(lambda: all(p.get_subscription_count() == count for p in pubs)
-                               and all(s.get_publisher_count() == count for s in self.outputs), timeout)
+        return self.spin_until(
+            lambda: (
+                all(p.get_subscription_count() == count for p in pubs)
+                and all(s.get_publisher_count() == count for s in self.outputs)
+            ),
+            timeout,
+        )
 
-    def publish(self, k: int, skip=(), corrupt_image=(), bad_encoding=(), nan_homography=(), images=True,
-                homographies=True, wait=True):
+    def publish(
+        self,
+        k: int,
+        skip=(),
+        corrupt_image=(),
+        bad_encoding=(),
+        nan_homography=(),
+        images=True,
+        homographies=True,
+        wait=True,
+    ):
         """Frame k (stamp 1 + 0.5 k); returns the stamp once its TrackArray arrived (30 s at most; ``wait``)."""
         stamp, frame = 1.0 + 0.5 * k, self.dataset.frames[k]
-        self.tracks.pop(round(stamp, 3), None)   # a replayed stamp must be answered anew
+        self.tracks.pop(round(stamp, 3), None)  # a replayed stamp must be answered anew
         self.diags.pop(round(stamp, 3), None)
         header = Header(stamp=seconds_to_stamp(stamp), frame_id='world')
         for v in self.views:
@@ -109,8 +127,25 @@ def _fuse(node_executable, *params):
 
 
 def test_faults_and_restart(node_executable, tmp_path):
-    assert cli(['simulate', '--config', 'complex', '--frames', '7', '--seed', '9', '--fast', '--image_ext', '.jpg',
-                '--out', str(tmp_path / 'sim')]) == 0
+    assert (
+        cli(
+            [
+                'simulate',
+                '--config',
+                'complex',
+                '--frames',
+                '7',
+                '--seed',
+                '9',
+                '--fast',
+                '--image_ext',
+                '.jpg',
+                '--out',
+                str(tmp_path / 'sim'),
+            ]
+        )
+        == 0
+    )
     drones = Drones(open_dataset(tmp_path / 'sim'))
     fuse = _fuse(node_executable)
     try:
@@ -122,11 +157,11 @@ def test_faults_and_restart(node_executable, tmp_path):
         log = stop(fuse)
         assert fuse.returncode == 0 and 'published 5 frames' in log, log
         assert drones.wait_for_fuse(count=0), 'the stopped fuse node is still subscribed'
-        fuse = _fuse(node_executable)   # restart mid-run: it resumes with the next frames
+        fuse = _fuse(node_executable)  # restart mid-run: it resumes with the next frames
         assert drones.wait_for_fuse(), 'restarted fuse node did not subscribe'
         resumed = [drones.publish(k) for k in (5, 6)]
         n_resumed = len(drones.tracks[resumed[1]].tracks)
-        replayed = drones.publish(0)    # the replay starts over: time goes back 2.5 s
+        replayed = drones.publish(0)  # the replay starts over: time goes back 2.5 s
         log2 = stop(fuse)
     finally:
         if fuse.poll() is None:
@@ -165,8 +200,25 @@ def test_faults_and_restart(node_executable, tmp_path):
 def _views_used_when_homographies_come_first(node_executable, tmp_path, *params) -> tuple:
     """Frame 0's homographies published before a fuse node starts, its images once fuse subscribed them:
     (views fused in that frame, the node's log)."""
-    assert cli(['simulate', '--config', 'complex', '--frames', '1', '--seed', '9', '--fast', '--image_ext', '.jpg',
-                '--out', str(tmp_path / 'sim')]) == 0
+    assert (
+        cli(
+            [
+                'simulate',
+                '--config',
+                'complex',
+                '--frames',
+                '1',
+                '--seed',
+                '9',
+                '--fast',
+                '--image_ext',
+                '.jpg',
+                '--out',
+                str(tmp_path / 'sim'),
+            ]
+        )
+        == 0
+    )
     drones = Drones(open_dataset(tmp_path / 'sim'))
     fuse = None
     try:
@@ -193,8 +245,9 @@ def test_homographies_published_before_the_node_matched_still_arrive(node_execut
 
 def test_a_volatile_geometry_qos_loses_what_was_published_before(node_executable, tmp_path):
     # The reason for geometry_qos history: with 'reliable' (volatile) the same start loses every homography.
-    used, log = _views_used_when_homographies_come_first(node_executable, tmp_path, 'sync_timeout:=3.0',
-                                                         'geometry_qos:=reliable')
+    used, log = _views_used_when_homographies_come_first(
+        node_executable, tmp_path, 'sync_timeout:=3.0', 'geometry_qos:=reliable'
+    )
     assert used == 0, log
 
 
@@ -208,16 +261,18 @@ def test_images_wait_for_the_homography_stream(node_executable):
     def wait(condition, timeout):
         return spin_until(node, condition, [fuse], timeout, executor)
 
-    images = {v: node.create_publisher(CompressedImage, f'/{v}/image/compressed', qos_by_name('reliable'))
-              for v in ('D1', 'D2')}
+    images = {
+        v: node.create_publisher(CompressedImage, f'/{v}/image/compressed', qos_by_name('reliable'))
+        for v in ('D1', 'D2')
+    }
     fuse = _fuse(node_executable, 'views:=[D1,D2]', 'image_kind:=compressed')
     try:
         assert wait(lambda: node.count_subscribers('/D1/homography') == 1, 60.0), 'fuse did not start'
-        spin_for(node, 3.0, executor)   # what is tested: no image subscription for 3 s without a homography
+        spin_for(node, 3.0, executor)  # what is tested: no image subscription for 3 s without a homography
         assert [p.get_subscription_count() for p in images.values()] == [0, 0]
         homography = node.create_publisher(HomographyStamped, '/D1/homography', publisher_qos())
         assert wait(lambda: images['D1'].get_subscription_count() == 1, 30.0)
-        spin_for(node, 1.0, executor)   # what is tested: D2, still without a homography, stays unsubscribed
+        spin_for(node, 1.0, executor)  # what is tested: D2, still without a homography, stays unsubscribed
         assert images['D2'].get_subscription_count() == 0 and homography.get_subscription_count() == 1
         log = stop(fuse)
     finally:
@@ -232,8 +287,25 @@ def test_images_wait_for_the_homography_stream(node_executable):
 def test_a_killed_fuse_node_is_replaced(node_executable, tmp_path):
     """SIGKILL mid-run (issue 17): no shutdown at all, its DDS participant left behind until it expires; a new
     process subscribes and fuses the next frames."""
-    assert cli(['simulate', '--config', 'complex', '--frames', '3', '--seed', '9', '--fast', '--image_ext', '.jpg',
-                '--out', str(tmp_path / 'sim')]) == 0
+    assert (
+        cli(
+            [
+                'simulate',
+                '--config',
+                'complex',
+                '--frames',
+                '3',
+                '--seed',
+                '9',
+                '--fast',
+                '--image_ext',
+                '.jpg',
+                '--out',
+                str(tmp_path / 'sim'),
+            ]
+        )
+        == 0
+    )
     drones = Drones(open_dataset(tmp_path / 'sim'))
     fuse = _fuse(node_executable)
     try:
@@ -253,4 +325,4 @@ def test_a_killed_fuse_node_is_replaced(node_executable, tmp_path):
         drones.close()
     assert before in drones.tracks and all(s in drones.tracks for s in after)
     assert 'published 2 frames' in log, log
-    assert len(drones.tracks[after[1]].tracks) > 10   # tracks are born again after birth_hits frames
+    assert len(drones.tracks[after[1]].tracks) > 10  # tracks are born again after birth_hits frames

@@ -35,23 +35,33 @@ def _started_and_stopped(output: str) -> tuple:
 @pytest.mark.slow
 def test_full_graph_replay_of_the_real_sample_ends_by_itself(matrix_sample, tmp_path):
     bag, rec, monitor = tmp_path / 'bag', tmp_path / 'rec', tmp_path / 'monitor'
-    assert cli(['bag', str(matrix_sample), '--out', str(bag)]) == 0   # as the README makes it
-    run = _launch_graph(f'bag:={bag}', f'dataset:={matrix_sample}', f'record:={rec}', 'monitor:=true',
-                              f'monitor_out:={monitor}', 'drones_per_process:=0')
+    assert cli(['bag', str(matrix_sample), '--out', str(bag)]) == 0  # as the README makes it
+    run = _launch_graph(
+        f'bag:={bag}',
+        f'dataset:={matrix_sample}',
+        f'record:={rec}',
+        'monitor:=true',
+        f'monitor_out:={monitor}',
+        'drones_per_process:=0',
+    )
     out = run.stdout
     assert run.returncode == 0, out[-8000:]
     assert 'replay done: the bag was played and the monitor wrote its scores' in out, out[-4000:]
     assert 'played 5 frames' in out and 'lockstep: only' not in out and 'Traceback' not in out
-    assert f'closed {rec}:' in out   # the recorder closed its bag on the launch's SIGINT
+    assert f'closed {rec}:' in out  # the recorder closed its bag on the launch's SIGINT
     started, ended = _started_and_stopped(out)
-    assert len(started) == 5 and started == ended, (started, ended)   # drone, fuse, recorder, monitor, player
+    assert len(started) == 5 and started == ended, (started, ended)  # drone, fuse, recorder, monitor, player
     assert not [pid for pid in started if os.path.exists(f'/proc/{pid}')]
 
     summary = [line.split() for line in (monitor / 'graph_summary.txt').read_text().splitlines()]
-    assert ['all', '40'] in [row[:2] for row in summary]   # 8 views x 5 frames scored live
+    assert ['all', '40'] in [row[:2] for row in summary]  # 8 views x 5 frames scored live
     metrics = tmp_path / 'metrics.json'
-    scored = subprocess.run(['matrix-tracker', 'evaluate-recording', str(rec), '--ground-truth', str(bag),
-                             '--json', str(metrics)], capture_output=True, text=True, timeout=300)
+    scored = subprocess.run(
+        ['matrix-tracker', 'evaluate-recording', str(rec), '--ground-truth', str(bag), '--json', str(metrics)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert scored.returncode == 0, scored.stdout + scored.stderr
     assert 'frames without a TrackArray: none' in scored.stdout
     result = json.loads(metrics.read_text())
@@ -71,34 +81,47 @@ def small_bag(tmp_path_factory):
     return sim
 
 
-@pytest.mark.parametrize('arguments, message', [
-    (['bag:=/nonexistent/bag'], 'not a rosbag2 folder'),
-    (['views:=[D9]'], 'no images of view(s) D9 in this bag'),
-    (['dataset:=/nonexistent/dataset'], 'dataset folder not found'),
-    (['input_kind:=lidar'], 'input_kind must be homography or camera_info'),
-    (['lockstep_timout:=3'], "unknown launch argument(s) 'lockstep_timout' (did you mean 'lockstep_timeout'?)"),
-])
+@pytest.mark.parametrize(
+    'arguments, message',
+    [
+        (['bag:=/nonexistent/bag'], 'not a rosbag2 folder'),
+        (['views:=[D9]'], 'no images of view(s) D9 in this bag'),
+        (['dataset:=/nonexistent/dataset'], 'dataset folder not found'),
+        (['input_kind:=lidar'], 'input_kind must be homography or camera_info'),
+        (['lockstep_timout:=3'], "unknown launch argument(s) 'lockstep_timout' (did you mean 'lockstep_timeout'?)"),
+    ],
+)
 def test_full_graph_argument_errors_say_what_is_wrong_before_anything_starts(small_bag, arguments, message):
-    given = dict(a.split(':=', 1) for a in [f'bag:={small_bag / "bag"}', f'dataset:={small_bag}', 'views:=[D1,D2]',
-                                                   *arguments])
+    given = dict(
+        a.split(':=', 1) for a in [f'bag:={small_bag / "bag"}', f'dataset:={small_bag}', 'views:=[D1,D2]', *arguments]
+    )
     run = _launch_graph(*(f'{k}:={v}' for k, v in given.items()), timeout_s=120)
     assert run.returncode != 0 and message in run.stdout, run.stdout[-3000:]
     assert 'process started' not in run.stdout
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize('arguments, reason', [
-    (['lockstep_timeout:=0.01'], 'bag_player exited with code 3 (lockstep timed out for some frame)'),
-    (['checkpoint:=/nonexistent/model.pt'], 'fuse exited early'),
-])
+@pytest.mark.parametrize(
+    'arguments, reason',
+    [
+        (['lockstep_timeout:=0.01'], 'bag_player exited with code 3 (lockstep timed out for some frame)'),
+        (['checkpoint:=/nonexistent/model.pt'], 'fuse exited early'),
+    ],
+)
 def test_full_graph_exits_non_zero_on_a_lockstep_timeout_or_a_dead_node(small_bag, tmp_path, arguments, reason):
-    run = _launch_graph(f'bag:={small_bag / "bag"}', f'dataset:={small_bag}', 'views:=[D1,D2]',
-                              'drones_per_process:=0',
-                              f'record:={tmp_path / "rec"}', *arguments, timeout_s=300)
+    run = _launch_graph(
+        f'bag:={small_bag / "bag"}',
+        f'dataset:={small_bag}',
+        'views:=[D1,D2]',
+        'drones_per_process:=0',
+        f'record:={tmp_path / "rec"}',
+        *arguments,
+        timeout_s=300,
+    )
     assert run.returncode == 1 and reason in run.stdout, run.stdout[-6000:]
     started, ended = _started_and_stopped(run.stdout)
-    assert started and started == ended, (started, ended)   # every node stopped all the same
-    assert f'closed {tmp_path / "rec"}:' in run.stdout       # and the recording closed
+    assert started and started == ended, (started, ended)  # every node stopped all the same
+    assert f'closed {tmp_path / "rec"}:' in run.stdout  # and the recording closed
 
 
 @pytest.mark.slow
@@ -112,17 +135,25 @@ def test_full_graph_replays_the_frames_before_a_bag_is_cut(small_bag, tmp_path):
     cut = tmp_path / 'cut'
     shutil.copytree(small_bag / 'bag', cut)
     f = mcap_file(cut)
-    f.write_bytes(f.read_bytes()[:int(f.stat().st_size * 0.75)])
-    run = _launch_graph(f'bag:={cut}', f'dataset:={small_bag}', 'views:=[D1,D2]', 'drones_per_process:=0',
-                        f'record:={tmp_path / "rec"}', timeout_s=300)
+    f.write_bytes(f.read_bytes()[: int(f.stat().st_size * 0.75)])
+    run = _launch_graph(
+        f'bag:={cut}',
+        f'dataset:={small_bag}',
+        'views:=[D1,D2]',
+        'drones_per_process:=0',
+        f'record:={tmp_path / "rec"}',
+        timeout_s=300,
+    )
     assert run.returncode == 1, run.stdout[-6000:]
-    assert 'bag_player exited with code 4 (the bag is damaged: only the frames before the damage were played)' \
-        in run.stdout, run.stdout[-6000:]
+    assert (
+        'bag_player exited with code 4 (the bag is damaged: only the frames before the damage were played)'
+        in run.stdout
+    ), run.stdout[-6000:]
     assert 'played 1 frames up to frame 0' in run.stdout and 'messages before the damage' in run.stdout
     started, ended = _started_and_stopped(run.stdout)
     assert started and started == ended, (started, ended)
     assert f'closed {tmp_path / "rec"}:' in run.stdout
-    assert (tmp_path / 'rec.tracks.txt').read_text().startswith('0 ')   # the played frame was fused, tracked
+    assert (tmp_path / 'rec.tracks.txt').read_text().startswith('0 ')  # the played frame was fused, tracked
 
 
 @pytest.mark.slow
@@ -130,13 +161,23 @@ def test_node_launch_files_on_the_real_sample(matrix_sample):
     """The README's three node launch files, one drone: images in, camera_info and homography out."""
     sample = f'dataset:={matrix_sample}'
     launches = [
-        ros_helpers.start_ros2('launch', 'matrix_calib', 'calib.launch.py', f'prior_dataset:={matrix_sample}',
-                               'views:=[D1]'),
-        ros_helpers.start_ros2('launch', 'matrix_register', 'register.launch.py',
-                               f'reference_dataset:={matrix_sample}', 'views:=[D1]'),
+        ros_helpers.start_ros2(
+            'launch', 'matrix_calib', 'calib.launch.py', f'prior_dataset:={matrix_sample}', 'views:=[D1]'
+        ),
+        ros_helpers.start_ros2(
+            'launch', 'matrix_register', 'register.launch.py', f'reference_dataset:={matrix_sample}', 'views:=[D1]'
+        ),
         # slow enough for a loaded machine; repeats until the test has what it waits for
-        ros_helpers.start_ros2('launch', 'matrix_ros', 'dataset_player.launch.py', sample, 'views:=[D1]',
-                               'rate:=0.25', 'loop:=true', 'wait_for_subscribers:=2'),
+        ros_helpers.start_ros2(
+            'launch',
+            'matrix_ros',
+            'dataset_player.launch.py',
+            sample,
+            'views:=[D1]',
+            'rate:=0.25',
+            'loop:=true',
+            'wait_for_subscribers:=2',
+        ),
     ]
     rclpy.init()
     node = Node('launch_files_probe')
@@ -152,7 +193,7 @@ def test_node_launch_files_on_the_real_sample(matrix_sample):
         outputs = ros_helpers.interrupt_all(launches) if not ok else None
         assert ok, f'got {sorted(got)}\n' + '\n'.join(o[-3000:] for o in outputs)
         assert got['/D1/homography'].header.frame_id and len(got['/D1/camera_info'].p) == 12
-        for name, value in (('/calib', 'views'), ('/register', 'views')):   # launch arguments -> typed parameters
+        for name, value in (('/calib', 'views'), ('/register', 'views')):  # launch arguments -> typed parameters
             shown = ros_helpers.ros2_graph('param', 'get', name, value).stdout
             assert "String values are: ['D1']" in shown, shown
     finally:

@@ -20,30 +20,78 @@ def test_fuse_started_with_ros2_run_feeds_another_process_and_takes_live_paramet
     params = f'{prefix}/share/matrix_bev_tracker/config/fuse.yaml'
     # fuse builds RViz markers only while someone subscribes: this echo, in the graph before fuse starts (started
     # beside fuse, the CLI was not yet matched when fuse had fused both frames of a loaded CI run)
-    markers = ros_helpers.start_ros2('topic', 'echo', '--no-daemon', '--once', '--qos-reliability', 'reliable',
-                                     '/markers', 'visualization_msgs/msg/MarkerArray')
+    markers = ros_helpers.start_ros2(
+        'topic',
+        'echo',
+        '--no-daemon',
+        '--once',
+        '--qos-reliability',
+        'reliable',
+        '/markers',
+        'visualization_msgs/msg/MarkerArray',
+    )
     try:
-        ros_helpers.wait_for(lambda: 'Subscription count: 1' in ros_helpers.ros2_graph('topic', 'info', '/markers').stdout,
-                             120, 'the /markers echo to subscribe')
+        ros_helpers.wait_for(
+            lambda: 'Subscription count: 1' in ros_helpers.ros2_graph('topic', 'info', '/markers').stdout,
+            120,
+            'the /markers echo to subscribe',
+        )
     except AssertionError:
         ros_helpers.interrupt_all([markers])
         raise
     # geometry: the bag's ground-truth CameraInfo (no calib or register needed to feed fuse)
-    fuse = ros_helpers.start_ros2('run', 'matrix_bev_tracker', 'fuse', '--ros-args', '--params-file', params,
-                                  '-p', f'views:=[{",".join(VIEWS)}]', '-p', 'input_kind:=camera_info',
-                                  '-p', "camera_info_topic:='{view}/ground_truth/camera_info'",
-                                  '-p', 'use_sim_time:=true')
+    fuse = ros_helpers.start_ros2(
+        'run',
+        'matrix_bev_tracker',
+        'fuse',
+        '--ros-args',
+        '--params-file',
+        params,
+        '-p',
+        f'views:=[{",".join(VIEWS)}]',
+        '-p',
+        'input_kind:=camera_info',
+        '-p',
+        "camera_info_topic:='{view}/ground_truth/camera_info'",
+        '-p',
+        'use_sim_time:=true',
+    )
     # transient local, as the graph's observers: it gets the tracks whenever it matched
-    echo = ros_helpers.start_ros2('topic', 'echo', '--no-daemon', '--once', '--qos-durability', 'transient_local',
-                                  '--qos-reliability', 'reliable', '/tracks', 'matrix_msgs/msg/TrackArray')
+    echo = ros_helpers.start_ros2(
+        'topic',
+        'echo',
+        '--no-daemon',
+        '--once',
+        '--qos-durability',
+        'transient_local',
+        '--qos-reliability',
+        'reliable',
+        '/tracks',
+        'matrix_msgs/msg/TrackArray',
+    )
     topics = ','.join(BagFacts.read(str(sim / 'bag'), VIEWS).topics)
-    player = ros_helpers.start_ros2('run', 'matrix_ros', 'bag_player', '--ros-args', '-p', f'bag:={sim / "bag"}',
-                                    '-p', f'topics:=[{topics}]', '-p', 'wait_for_subscribers:=1',
-                                    '-p', 'lockstep:=true', '-p', 'lockstep_topic:=/tracks',
-                                    '-p', 'lockstep_type:=matrix_msgs/msg/TrackArray')
+    player = ros_helpers.start_ros2(
+        'run',
+        'matrix_ros',
+        'bag_player',
+        '--ros-args',
+        '-p',
+        f'bag:={sim / "bag"}',
+        '-p',
+        f'topics:=[{topics}]',
+        '-p',
+        'wait_for_subscribers:=1',
+        '-p',
+        'lockstep:=true',
+        '-p',
+        'lockstep_topic:=/tracks',
+        '-p',
+        'lockstep_type:=matrix_msgs/msg/TrackArray',
+    )
     try:
-        ros_helpers.wait_for(lambda: player.poll() is not None or fuse.poll() is not None, 240,
-                             'the player to play the bag')
+        ros_helpers.wait_for(
+            lambda: player.poll() is not None or fuse.poll() is not None, 240, 'the player to play the bag'
+        )
         assert fuse.poll() is None, ros_helpers.finish(fuse)[-3000:]
         played = ros_helpers.finish(player)
         echoed = ros_helpers.finish(echo, timeout_s=60)
@@ -71,11 +119,30 @@ def test_fuse_started_with_ros2_run_feeds_another_process_and_takes_live_paramet
 
 
 def test_dataset_player_started_with_ros2_run(matrix_sample):
-    player = ros_helpers.start_ros2('run', 'matrix_ros', 'dataset_player', '--ros-args', '-p',
-                                    f'dataset:={matrix_sample}', '-p', 'views:=[D1]', '-p', 'loop:=true')
+    player = ros_helpers.start_ros2(
+        'run',
+        'matrix_ros',
+        'dataset_player',
+        '--ros-args',
+        '-p',
+        f'dataset:={matrix_sample}',
+        '-p',
+        'views:=[D1]',
+        '-p',
+        'loop:=true',
+    )
     try:
-        echo = ros_helpers.ros2('topic', 'echo', '--no-daemon', '--once', '--qos-durability', 'transient_local',
-                                '/D1/ground_truth/camera_info', 'sensor_msgs/msg/CameraInfo', timeout_s=120)
+        echo = ros_helpers.ros2(
+            'topic',
+            'echo',
+            '--no-daemon',
+            '--once',
+            '--qos-durability',
+            'transient_local',
+            '/D1/ground_truth/camera_info',
+            'sensor_msgs/msg/CameraInfo',
+            timeout_s=120,
+        )
         assert echo.returncode == 0 and 'width: 1920' in echo.stdout, echo.stdout[-3000:]
     finally:
         output = ros_helpers.interrupt(player)

@@ -29,10 +29,23 @@ def files(matrix_sample, tmp_path_factory):
 
 
 def test_track_then_score(files, capsys):
-    assert main(['track', str(files / 'dets.txt'), '--out', str(files / 'tracks.txt'), '--birth_hits', '2',
-                 '--report_coasting', '0']) == 0
+    assert (
+        main(
+            [
+                'track',
+                str(files / 'dets.txt'),
+                '--out',
+                str(files / 'tracks.txt'),
+                '--birth_hits',
+                '2',
+                '--report_coasting',
+                '0',
+            ]
+        )
+        == 0
+    )
     tracks = read_bev_points(files / 'tracks.txt')
-    assert tracks.has_ids and 30 not in set(tracks.frames)   # nothing reported in the empty frame
+    assert tracks.has_ids and 30 not in set(tracks.frames)  # nothing reported in the empty frame
     assert 38 <= len(np.unique(tracks.ids)) <= 50
     capsys.readouterr()
     assert main(['score', str(files / 'gt.txt'), str(files / 'tracks.txt'), '--json']) == 0
@@ -49,7 +62,7 @@ def test_score_detections_only_and_table(files, capsys):
     text = capsys.readouterr().out
     assert 'MODA (@0.5 m)' in text and 'MOTA' not in text
     moda = float(text.split('MODA (@0.5 m)')[1].split('%')[0])
-    assert 90 < moda < 96      # about 5 % dropped + one empty frame of 60
+    assert 90 < moda < 96  # about 5 % dropped + one empty frame of 60
 
 
 def test_bad_file_is_a_clear_error(tmp_path, capsys):

@@ -43,8 +43,12 @@ def noisy_detections(gt: BevPoints, seed: int, miss=0.1, noise=0.1, false_alarms
             xy.append(rng.uniform([0, -30], [30, 0]))
             scores.append(rng.uniform(0.2, 0.6))
             offs.append(rng.normal(0, 0.3, 2))
-        out.append((int(f), BevDetections(np.reshape(xy, (-1, 2)), scores,
-                                          np.reshape(offs, (-1, 2)) if with_offsets else None)))
+        out.append(
+            (
+                int(f),
+                BevDetections(np.reshape(xy, (-1, 2)), scores, np.reshape(offs, (-1, 2)) if with_offsets else None),
+            )
+        )
     return out
 
 
@@ -67,9 +71,9 @@ def test_tracks_real_pedestrians_through_misses(trajectories, with_offsets):
     # of one frame is reported at the prediction with the default report_coasting 1).
     assert m.mota > 0.85, m
     assert m.mostly_tracked >= 38, m
-    if with_offsets:   # CenterTrack offsets make frame-to-frame association nearly unambiguous
+    if with_offsets:  # CenterTrack offsets make frame-to-frame association nearly unambiguous
         assert m.idf1 > 0.88 and m.id_switches <= 12, m
-    else:              # pedestrians turn within 0.5 s; the constant-velocity model alone slips now and then
+    else:  # pedestrians turn within 0.5 s; the constant-velocity model alone slips now and then
         assert m.idf1 > 0.8 and m.id_switches <= 40, m
 
 
@@ -93,7 +97,7 @@ def test_birth_after_k_hits_and_death_after_m_misses():
     assert tr.update(single([0.5, 0])) == []
     out = tr.update(single([1.0, 0]))
     assert [o.track_id for o in out] == [1]
-    assert out[0].velocity[0] > 0.5   # learned ~1 m/s along x
+    assert out[0].velocity[0] > 0.5  # learned ~1 m/s along x
     # two frames missing: the track coasts (not reported) and is picked up again where it should be
     assert tr.update(single(np.zeros((0, 2)))) == [] and tr.update(single(np.zeros((0, 2)))) == []
     assert [o.track_id for o in tr.update(single([2.5, 0]))] == [1]
@@ -106,24 +110,24 @@ def test_birth_after_k_hits_and_death_after_m_misses():
 
 def test_first_frame_tracks_are_confirmed_at_once_and_coasting_is_reported_only_on_request():
     tr = BevTracker(TrackerSettings(birth_hits=2, report_coasting=1))
-    assert [o.track_id for o in tr.update(single([0, 0]))] == [1]        # first frame: id at once
-    assert [o.track_id for o in tr.update(single([[0, 0], [5, 5]]))] == [1]   # newcomers wait birth_hits
-    out = tr.update(single(np.zeros((0, 2))))                             # track 1 coasts one frame
+    assert [o.track_id for o in tr.update(single([0, 0]))] == [1]  # first frame: id at once
+    assert [o.track_id for o in tr.update(single([[0, 0], [5, 5]]))] == [1]  # newcomers wait birth_hits
+    out = tr.update(single(np.zeros((0, 2))))  # track 1 coasts one frame
     assert [(o.track_id, o.misses) for o in out] == [(1, 1)]
-    assert tr.update(single(np.zeros((0, 2)))) == []                      # two misses > report_coasting
+    assert tr.update(single(np.zeros((0, 2)))) == []  # two misses > report_coasting
     tr.reset()
-    assert [o.track_id for o in tr.update(single([0, 0]))] == [1]        # first frame again after reset()
+    assert [o.track_id for o in tr.update(single([0, 0]))] == [1]  # first frame again after reset()
     quiet = BevTracker(TrackerSettings(birth_hits=2, report_coasting=0))
     quiet.update(single([0, 0]))
-    assert quiet.update(single(np.zeros((0, 2)))) == []                   # report_coasting 0: misses are not reported
+    assert quiet.update(single(np.zeros((0, 2)))) == []  # report_coasting 0: misses are not reported
 
 
 def test_low_scores_extend_but_never_start_tracks_and_reset_restarts_ids():
     tr = BevTracker(TrackerSettings(birth_hits=1, report_coasting=0))
-    assert tr.update(single([0, 0], score=0.3)) == []          # weak detection: no new track
+    assert tr.update(single([0, 0], score=0.3)) == []  # weak detection: no new track
     assert [o.track_id for o in tr.update(single([0, 0]))] == [1]
-    assert [o.track_id for o in tr.update(single([0.2, 0], score=0.3))] == [1]   # weak one extends it
-    assert tr.update(single([9, 9], score=0.1)) == []           # below low_score: ignored
+    assert [o.track_id for o in tr.update(single([0.2, 0], score=0.3))] == [1]  # weak one extends it
+    assert tr.update(single([9, 9], score=0.1)) == []  # below low_score: ignored
     tr.reset()
     assert tr.tracks == []
     assert [o.track_id for o in tr.update(single([5, 5]))] == [1]
@@ -132,7 +136,7 @@ def test_low_scores_extend_but_never_start_tracks_and_reset_restarts_ids():
 def test_gate_separates_far_detections():
     tr = BevTracker(TrackerSettings(birth_hits=1, gate_m=1.0, report_coasting=0))
     first = tr.update(single([0, 0]))
-    second = tr.update(single([1.5, 0]))          # 1.5 m jump > gate: a different person
+    second = tr.update(single([1.5, 0]))  # 1.5 m jump > gate: a different person
     assert [o.track_id for o in first] == [1] and [o.track_id for o in second] == [2]
 
 
@@ -147,7 +151,7 @@ def test_a_track_reports_its_detection_of_the_frame_beside_the_filtered_position
     tr = BevTracker(TrackerSettings(birth_hits=1, report_coasting=1))
     tr.update(single([0, 0]))
     (out,) = tr.update(single([0.6, 0.2]))
-    np.testing.assert_allclose(out.detection_xy, [0.6, 0.2])    # where the person is now
-    assert not np.allclose(out.xy, out.detection_xy)             # the filter lags behind
+    np.testing.assert_allclose(out.detection_xy, [0.6, 0.2])  # where the person is now
+    assert not np.allclose(out.xy, out.detection_xy)  # the filter lags behind
     (coasting,) = tr.update(single(np.zeros((0, 2))))
-    np.testing.assert_allclose(coasting.detection_xy, coasting.xy)   # no detection: the prediction
+    np.testing.assert_allclose(coasting.detection_xy, coasting.xy)  # no detection: the prediction

@@ -20,8 +20,12 @@ setup(
     maintainer_email='dev@matrix-tracker.invalid',
     description='The matrix-tracker graph (launch file and run_graph) and the graph monitor.',
     license='Apache-2.0',
-    entry_points={'console_scripts': ['discovery_server = matrix_bringup.discovery_server:main',
-                                      'drone = matrix_bringup.drone:main',
-                                    'graph_monitor = matrix_bringup.graph_monitor:main',
-                                    'run_graph = matrix_bringup.run_graph:main']},
+    entry_points={
+        'console_scripts': [
+            'discovery_server = matrix_bringup.discovery_server:main',
+            'drone = matrix_bringup.drone:main',
+            'graph_monitor = matrix_bringup.graph_monitor:main',
+            'run_graph = matrix_bringup.run_graph:main',
+        ]
+    },
 )

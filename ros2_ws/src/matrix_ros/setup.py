@@ -20,10 +20,12 @@ setup(
     maintainer_email='dev@matrix-tracker.invalid',
     description='ROS 2 glue shared by the matrix-tracker nodes.',
     license='Apache-2.0',
-    entry_points={'console_scripts': [
-        'dataset_player = matrix_ros.dataset_player:main',
-        'bag_player = matrix_ros.bag_player:main',
-        'recorder = matrix_ros.recorder:main',
-        'link_sender = matrix_ros.link_sender:main',
-    ]},
+    entry_points={
+        'console_scripts': [
+            'dataset_player = matrix_ros.dataset_player:main',
+            'bag_player = matrix_ros.bag_player:main',
+            'recorder = matrix_ros.recorder:main',
+            'link_sender = matrix_ros.link_sender:main',
+        ]
+    },
 )

@@ -45,15 +45,20 @@ class FuseNode(Node):
         super().__init__('fuse')
         self.settings = s = declare_settings(self, FuseNodeSettings, defaults, live=LIVE_PARAMETERS)
         self.fuser = BevFuser(s)
-        warm_up_s = self.fuser.warm_up()   # before subscribing: the first frame would pay for the network's kernels
-        self.inputs, self.frames_published = ViewInputs(self.fuser.input_size, s.min_confidence, s.jpeg_reduced_decode), 0
+        warm_up_s = self.fuser.warm_up()  # before subscribing: the first frame would pay for the network's kernels
+        self.inputs, self.frames_published = (
+            ViewInputs(self.fuser.input_size, s.min_confidence, s.jpeg_reduced_decode),
+            0,
+        )
         self._start_fresh()
         self.connections = {v: self._subscribe_view(v) for v in s.views}
         qos = publisher_qos()
-        self.pubs = {'tracks': self.create_publisher(TrackArray, s.tracks_topic, qos),
-                     'detections': self.create_publisher(TrackArray, s.detections_topic, qos),
-                     'markers': self.create_publisher(MarkerArray, s.markers_topic, qos),
-                     'diagnostics': self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, qos)}
+        self.pubs = {
+            'tracks': self.create_publisher(TrackArray, s.tracks_topic, qos),
+            'detections': self.create_publisher(TrackArray, s.detections_topic, qos),
+            'markers': self.create_publisher(MarkerArray, s.markers_topic, qos),
+            'diagnostics': self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, qos),
+        }
         if s.heatmap_topic:
             self.pubs['heatmap'] = self.create_publisher(OccupancyGrid, s.heatmap_topic, qos)
         self.image_outputs = ImageOutputs(self, s)
@@ -62,25 +67,41 @@ class FuseNode(Node):
         self.create_timer(0.05, self._poll, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(
             f'fusing {len(s.views)} views ({s.image_kind} images, {s.input_kind}) with {s.checkpoint_path()} (warm-up '
-            f'{warm_up_s:.2f} s); grid {self.fuser.grid.shape} cells of {self.fuser.grid.cell} m; tracks on {s.tracks_topic}')
+            f'{warm_up_s:.2f} s); grid {self.fuser.grid.shape} cells of {self.fuser.grid.cell} m; tracks on {s.tracks_topic}'
+        )
 
     def _subscribe_view(self, view: str) -> SubscribeWhenConnected:
         """The view's geometry now, its images once the geometry has a publisher (matrix_ros.connect)."""
         s = self.settings
-        geometry_type, pattern = ((HomographyStamped, s.homography_topic) if s.input_kind == 'homography'
-                                  else (CameraInfo, s.camera_info_topic))
-        geometry = self.create_subscription(geometry_type, s.topic(pattern, view),
-                                            lambda m: self._add(view, 'geometry', m), qos_by_name(s.geometry_qos))
+        geometry_type, pattern = (
+            (HomographyStamped, s.homography_topic)
+            if s.input_kind == 'homography'
+            else (CameraInfo, s.camera_info_topic)
+        )
+        geometry = self.create_subscription(
+            geometry_type, s.topic(pattern, view), lambda m: self._add(view, 'geometry', m), qos_by_name(s.geometry_qos)
+        )
 
         def subscribe_images():
-            for kind, msg_type, image_pattern in (('raw', Image, s.image_topic),
-                                                  ('compressed', CompressedImage, s.compressed_topic)):
+            for kind, msg_type, image_pattern in (
+                ('raw', Image, s.image_topic),
+                ('compressed', CompressedImage, s.compressed_topic),
+            ):
                 if s.image_kind in (kind, 'both'):
-                    self.create_subscription(msg_type, s.topic(image_pattern, view),
-                                             lambda m: self._add(view, 'image', m), qos_by_name(s.qos))
-            if s.dropped_topic:   # the drone's word that a frame's image will not come
-                self.create_subscription(Header, s.topic(s.dropped_topic, view),
-                                         lambda m: self._add(view, 'image', ImageNotSent(m)), qos_by_name('reliable'))
+                    self.create_subscription(
+                        msg_type,
+                        s.topic(image_pattern, view),
+                        lambda m: self._add(view, 'image', m),
+                        qos_by_name(s.qos),
+                    )
+            if s.dropped_topic:  # the drone's word that a frame's image will not come
+                self.create_subscription(
+                    Header,
+                    s.topic(s.dropped_topic, view),
+                    lambda m: self._add(view, 'image', ImageNotSent(m)),
+                    qos_by_name('reliable'),
+                )
+
         return SubscribeWhenConnected(self, view, [geometry], subscribe_images)
 
     def _start_fresh(self) -> None:
@@ -95,16 +116,21 @@ class FuseNode(Node):
     def _add(self, view: str, part: str, msg) -> None:
         stamp, now = stamp_to_seconds(msg.header.stamp), time.monotonic()
         if self.last_fused is not None and stamp < self.last_fused - self.settings.tracker_reset_gap_s:
-            self.get_logger().warning(f't={stamp:.3f} s is {self.last_fused - stamp:.1f} s before the last fused frame: '
-                                      'time went back, starting fresh (a replay restarted: a new sequence)')
+            self.get_logger().warning(
+                f't={stamp:.3f} s is {self.last_fused - stamp:.1f} s before the last fused frame: '
+                'time went back, starting fresh (a replay restarted: a new sequence)'
+            )
             self._start_fresh()
-        if part == 'image':   # decoded now, while the drones work on this frame, or after an earlier frame fused
+        if part == 'image':  # decoded now, while the drones work on this frame, or after an earlier frame fused
             self.inputs.decode_early(view, msg, defer=self.sync.waiting_before(stamp))
         frames = self.sync.add(f'{view}/{part}', stamp, msg, now)
         if self.sync.late_items > self.late_reported:
             self.late_reported = self.sync.late_items
-            self.get_logger().warning(f'{view}: {part} at t={stamp:.3f} s arrived after its frame was fused; '
-                                      f'ignored ({self.late_reported} late so far)', throttle_duration_sec=5.0)
+            self.get_logger().warning(
+                f'{view}: {part} at t={stamp:.3f} s arrived after its frame was fused; '
+                f'ignored ({self.late_reported} late so far)',
+                throttle_duration_sec=5.0,
+            )
         for frame in frames:
             self._fuse(frame)
 
@@ -115,9 +141,11 @@ class FuseNode(Node):
     def _fuse(self, frame) -> None:
         s, t0 = self.settings, time.perf_counter()
         views = self.inputs.frame_views(frame.items, s.views, s.input_kind)
-        if views is None:   # geometry_qos history (e.g. after a restart) without a single image
-            self.get_logger().warning(f't={frame.stamp:.3f} s: geometry without any image (published before this '
-                                      'node matched?); not fused', throttle_duration_sec=5.0)
+        if views is None:  # geometry_qos history (e.g. after a restart) without a single image
+            self.get_logger().warning(
+                f't={frame.stamp:.3f} s: geometry without any image (published before this node matched?); not fused',
+                throttle_duration_sec=5.0,
+            )
             return
         for v in [v for v, view in views.items() if view.reason and not view.reason.startswith('no ')]:
             self.get_logger().error(f'{v}: not used for this frame: {views[v].reason}')
@@ -129,7 +157,7 @@ class FuseNode(Node):
         header = Header(stamp=seconds_to_stamp(frame.stamp), frame_id=s.world_frame)
         self.pubs['tracks'].publish(out.tracks_msg(header, result.tracks))
         self.pubs['detections'].publish(out.detections_msg(header, result.detections, s.frame_interval_s))
-        if self.pubs['markers'].get_subscription_count():   # for RViz: ~50 messages a frame, ~12 ms of CPU
+        if self.pubs['markers'].get_subscription_count():  # for RViz: ~50 messages a frame, ~12 ms of CPU
             self.pubs['markers'].publish(out.markers_msg(header, result.tracks))
         self.image_outputs.publish(header.stamp, frame, result.tracks)
         if 'heatmap' in self.pubs:
@@ -141,10 +169,19 @@ class FuseNode(Node):
             self.get_logger().warning(missing)
         if result.resets:
             self.get_logger().info(f't={frame.stamp:.3f} s: reset {" and ".join(result.resets)} state')
-        self.pubs['diagnostics'].publish(out.fuse_diagnostics(header, frame, result, time.monotonic() - frame.first_arrival, latency,
-                                                              self.sync.late_items, self.frames_published))
-        self.inputs.decode_deferred()   # published: now the images of the next frames, and the next frame's share
-        self.fuser.prepare_next()       # of this one (its latency is spared both)
+        self.pubs['diagnostics'].publish(
+            out.fuse_diagnostics(
+                header,
+                frame,
+                result,
+                time.monotonic() - frame.first_arrival,
+                latency,
+                self.sync.late_items,
+                self.frames_published,
+            )
+        )
+        self.inputs.decode_deferred()  # published: now the images of the next frames, and the next frame's share
+        self.fuser.prepare_next()  # of this one (its latency is spared both)
 
     def _on_reset(self, request, response):
         self._start_fresh()
@@ -153,8 +190,10 @@ class FuseNode(Node):
         return response
 
     def close(self) -> None:
-        self.get_logger().info(f'published {self.frames_published} frames; {len(self.sync.pending_stamps)} pending '
-                               f'frames dropped at shutdown; {self.sync.late_items} late messages')
+        self.get_logger().info(
+            f'published {self.frames_published} frames; {len(self.sync.pending_stamps)} pending '
+            f'frames dropped at shutdown; {self.sync.late_items} late messages'
+        )
 
 
 def main(argv=None) -> int:

@@ -9,41 +9,66 @@ from matrix_core.fusion.settings import FuseSettings
 from matrix_ros.node_settings import NodeSettings
 
 
-GEOMETRY_QOS = ('history', 'reliable')   # never best effort: a lost homography loses the view's frame
+GEOMETRY_QOS = ('history', 'reliable')  # never best effort: a lost homography loses the view's frame
 
 
 @dataclass
 class FuseNodeSettings(NodeSettings, ImageBoxSettings, FuseSettings):
     tracks_topic: str = field(default=topics.TRACKS, metadata={'help': 'matrix_msgs/TrackArray of the tracks'})
-    detections_topic: str = field(default=topics.DETECTIONS, metadata={
-        'help': 'matrix_msgs/TrackArray of the detections (id 0)'})
-    markers_topic: str = field(default=topics.MARKERS, metadata={'help': 'visualization_msgs/MarkerArray of the tracks'})
-    heatmap_topic: str = field(default=topics.BEV_HEATMAP, metadata={
-        'help': 'nav_msgs/OccupancyGrid heatmap ("" = off)'})
-    detections_2d_topic: str = field(default='{view}/' + topics.DETECTIONS_2D, metadata={
-        'help': 'matrix_msgs/Detection2DArray per drone: the tracks\' boxes in its image, with the fused ids '
-                '(pattern; "" = off; see matrix_core.fusion.image_outputs for the camera of each view)'})
-    overlay: bool = field(default=False, metadata={
-        'help': 'also publish each drone\'s image with the boxes and ids drawn on overlay_topic (JPEG; costs a '
-                'full image decode and encode per view and frame)'})
-    overlay_topic: str = field(default='{view}/' + topics.OVERLAY_COMPRESSED, metadata={
-        'help': 'sensor_msgs/CompressedImage overlay topic pattern'})
-    scene_dataset: str = field(default='', metadata={
-        'help': 'MATRIX folder of the scene (the one the graph replays): its reference intrinsics give the camera '
-                'a registration implies (input_kind homography), its meta the obstacles; "" = no 2D outputs '
-                'from homographies'})
-    geometry_qos: str = field(default='history', metadata={
-        'help': 'QoS of the homography / camera_info subscriptions: history (transient local: also what a '
-                'publisher sent before it matched this node; discovery is one-sided, so a drone may publish its '
-                'first homography before it knows this node, though this node already knows the drone) or '
-                'reliable (volatile; for publishers that offer only volatile durability)'})
+    detections_topic: str = field(
+        default=topics.DETECTIONS, metadata={'help': 'matrix_msgs/TrackArray of the detections (id 0)'}
+    )
+    markers_topic: str = field(
+        default=topics.MARKERS, metadata={'help': 'visualization_msgs/MarkerArray of the tracks'}
+    )
+    heatmap_topic: str = field(
+        default=topics.BEV_HEATMAP, metadata={'help': 'nav_msgs/OccupancyGrid heatmap ("" = off)'}
+    )
+    detections_2d_topic: str = field(
+        default='{view}/' + topics.DETECTIONS_2D,
+        metadata={
+            'help': 'matrix_msgs/Detection2DArray per drone: the tracks\' boxes in its image, with the fused ids '
+            '(pattern; "" = off; see matrix_core.fusion.image_outputs for the camera of each view)'
+        },
+    )
+    overlay: bool = field(
+        default=False,
+        metadata={
+            'help': 'also publish each drone\'s image with the boxes and ids drawn on overlay_topic (JPEG; costs a '
+            'full image decode and encode per view and frame)'
+        },
+    )
+    overlay_topic: str = field(
+        default='{view}/' + topics.OVERLAY_COMPRESSED,
+        metadata={'help': 'sensor_msgs/CompressedImage overlay topic pattern'},
+    )
+    scene_dataset: str = field(
+        default='',
+        metadata={
+            'help': 'MATRIX folder of the scene (the one the graph replays): its reference intrinsics give the camera '
+            'a registration implies (input_kind homography), its meta the obstacles; "" = no 2D outputs '
+            'from homographies'
+        },
+    )
+    geometry_qos: str = field(
+        default='history',
+        metadata={
+            'help': 'QoS of the homography / camera_info subscriptions: history (transient local: also what a '
+            'publisher sent before it matched this node; discovery is one-sided, so a drone may publish its '
+            'first homography before it knows this node, though this node already knows the drone) or '
+            'reliable (volatile; for publishers that offer only volatile durability)'
+        },
+    )
     world_frame: str = field(default=topics.WORLD_FRAME, metadata={'help': 'frame_id of everything published'})
     stamp_tolerance: float = field(default=0.001, metadata={'help': 'stamps closer than this (s) are one frame'})
-    jpeg_reduced_decode: bool = field(default=True, metadata={
-        'help': 'decode JPEG images directly at 1/2, 1/4 or 1/8 size when that still covers the network input '
-                '(1920x1080 -> 960x540 for 480x272): about 0.1 s less per frame of 8 views; pixels differ from a '
-                'full decode + resize by < 1 grey level'})
-
+    jpeg_reduced_decode: bool = field(
+        default=True,
+        metadata={
+            'help': 'decode JPEG images directly at 1/2, 1/4 or 1/8 size when that still covers the network input '
+            '(1920x1080 -> 960x540 for 480x272): about 0.1 s less per frame of 8 views; pixels differ from a '
+            'full decode + resize by < 1 grey level'
+        },
+    )
 
     def __post_init__(self):
         if self.geometry_qos not in GEOMETRY_QOS:

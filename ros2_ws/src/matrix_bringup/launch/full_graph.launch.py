@@ -22,27 +22,42 @@ from matrix_bringup.graph import GraphSettings, graph_nodes
 from matrix_bringup.replay_end import ReplayEnd
 from matrix_ros.launch_settings import declare_arguments, settings_from_launch
 
-EXIT_AT_END = DeclareLaunchArgument('exit_at_end', default_value='true', description=(
-    'true: once the player has played the bag and the last frame is processed (and the monitor, if any, has '
-    'written its scores) every node is stopped and the launch exits: 0, or 1 when lockstep timed out for '
-    'some frame or a node died; false: the nodes keep running after the replay'))
+EXIT_AT_END = DeclareLaunchArgument(
+    'exit_at_end',
+    default_value='true',
+    description=(
+        'true: once the player has played the bag and the last frame is processed (and the monitor, if any, has '
+        'written its scores) every node is stopped and the launch exits: 0, or 1 when lockstep timed out for '
+        'some frame or a node died; false: the nodes keep running after the replay'
+    ),
+)
 
 
 def _graph(context):
     """Resolved at launch time: the number of processes depends on ``views`` and ``drones_per_process``."""
     settings = settings_from_launch(GraphSettings, context, other_arguments=['exit_at_end'])
-    actions = [SetEnvironmentVariable('FASTRTPS_DEFAULT_PROFILES_FILE', settings.dds_profile)] \
-        if settings.dds_profile else []
+    actions = (
+        [SetEnvironmentVariable('FASTRTPS_DEFAULT_PROFILES_FILE', settings.dds_profile)] if settings.dds_profile else []
+    )
     specs = graph_nodes(settings)
-    nodes = {spec.label: Node(package=spec.package, executable=spec.executable,
-                              name=spec.name if spec.renamed else None, namespace=spec.namespace or None,
-                              remappings=list(spec.remaps.items()) or None, output='screen',
-                              prefix=' '.join(spec.prefix) or None,
-                              parameters=[*spec.param_files, spec.parameters]) for spec in specs}
+    nodes = {
+        spec.label: Node(
+            package=spec.package,
+            executable=spec.executable,
+            name=spec.name if spec.renamed else None,
+            namespace=spec.namespace or None,
+            remappings=list(spec.remaps.items()) or None,
+            output='screen',
+            prefix=' '.join(spec.prefix) or None,
+            parameters=[*spec.param_files, spec.parameters],
+        )
+        for spec in specs
+    }
     if IfCondition(LaunchConfiguration('exit_at_end')).evaluate(context):
         monitor = next((s.label for s in specs if s.executable == 'graph_monitor'), None)
-        actions += ReplayEnd(nodes, player=specs[-1].label, monitor=monitor,
-                             monitor_timeout_s=settings.lockstep_timeout).handlers()
+        actions += ReplayEnd(
+            nodes, player=specs[-1].label, monitor=monitor, monitor_timeout_s=settings.lockstep_timeout
+        ).handlers()
     return actions + list(nodes.values())
 
 

@@ -28,8 +28,11 @@ from matrix_core import topics
 
 GROUND = 'ground'
 # fuse reads each drone's images from its link_sender, best effort, and its notices of frames not sent (STREAMS)
-LINK_IMAGES = {'compressed_topic': '{view}/' + topics.LINK_IMAGE_COMPRESSED, 'qos': 'sensor_data',
-               'dropped_topic': '{view}/' + topics.LINK_DROPPED}
+LINK_IMAGES = {
+    'compressed_topic': '{view}/' + topics.LINK_IMAGE_COMPRESSED,
+    'qos': 'sensor_data',
+    'dropped_topic': '{view}/' + topics.LINK_DROPPED,
+}
 UP, DOWN = 'drone -> ground', 'ground -> drone'
 
 
@@ -40,27 +43,41 @@ class LinkStream:
     topic: str
     msg_type: str
     direction: str
-    reliability: str     # 'best_effort' or 'reliable' (what the ground readers ask for)
-    readers: tuple       # ground processes that subscribe it
+    reliability: str  # 'best_effort' or 'reliable' (what the ground readers ask for)
+    readers: tuple  # ground processes that subscribe it
     why: str
 
 
 # Every per-drone stream a ground process may read: (stream, type, reliability, why).
 STREAMS = {
-    topics.LINK_IMAGE_COMPRESSED: (topics.COMPRESSED_TYPE, 'best_effort', (
-        "the camera's frames that link_sender lets through (a JPEG of 1080p, ~0.7 MB): a frame leaves once "
-        'the link budget carried the ones before, the others are dropped whole at the sender (a slow link '
-        'drops frames instead of queueing them or losing packets of each); best effort: nothing is resent, '
-        'fuse wants the newest frame only')),
-    topics.LINK_DROPPED: (topics.HEADER_TYPE, 'reliable', (
-        'tiny; the stamp of each frame link_sender dropped: fuse fuses that frame without waiting for its image')),
-    topics.HOMOGRAPHY: (topics.HOMOGRAPHY_TYPE, 'reliable', (
-        'tiny (~0.3 kB) and the geometry of its image: without it the view is missing for that frame')),
+    topics.LINK_IMAGE_COMPRESSED: (
+        topics.COMPRESSED_TYPE,
+        'best_effort',
+        (
+            "the camera's frames that link_sender lets through (a JPEG of 1080p, ~0.7 MB): a frame leaves once "
+            'the link budget carried the ones before, the others are dropped whole at the sender (a slow link '
+            'drops frames instead of queueing them or losing packets of each); best effort: nothing is resent, '
+            'fuse wants the newest frame only'
+        ),
+    ),
+    topics.LINK_DROPPED: (
+        topics.HEADER_TYPE,
+        'reliable',
+        ('tiny; the stamp of each frame link_sender dropped: fuse fuses that frame without waiting for its image'),
+    ),
+    topics.HOMOGRAPHY: (
+        topics.HOMOGRAPHY_TYPE,
+        'reliable',
+        ('tiny (~0.3 kB) and the geometry of its image: without it the view is missing for that frame'),
+    ),
     topics.CAMERA_INFO: (topics.CAMERA_INFO_TYPE, 'reliable', 'tiny; the calibration of each frame'),
     topics.POSE: (topics.POSE_TYPE, 'reliable', 'tiny; recorded for evaluation'),
     topics.GROUND_TRUTH_CAMERA_INFO: (topics.CAMERA_INFO_TYPE, 'reliable', 'tiny; only the monitor reads it'),
-    topics.DIAGNOSTICS_TOPIC: ('diagnostic_msgs/msg/DiagnosticArray', 'reliable', (
-        "calib's and register's status per frame (~1 kB): why a view failed, recorded on the ground")),
+    topics.DIAGNOSTICS_TOPIC: (
+        'diagnostic_msgs/msg/DiagnosticArray',
+        'reliable',
+        ("calib's and register's status per frame (~1 kB): why a view failed, recorded on the ground"),
+    ),
 }
 
 
@@ -86,8 +103,10 @@ class Deployment:
             lines.append(f'{host}: ' + ', '.join(n.label for n in nodes))
         for drone, streams in self.links.items():
             for st in streams:
-                lines.append(f'  link {drone} {st.direction}: {st.topic} [{st.msg_type}] {st.reliability} '
-                             f'-> {", ".join(st.readers)}: {st.why}')
+                lines.append(
+                    f'  link {drone} {st.direction}: {st.topic} [{st.msg_type}] {st.reliability} '
+                    f'-> {", ".join(st.readers)}: {st.why}'
+                )
         return '\n'.join(lines)
 
 
@@ -99,30 +118,37 @@ def deployment(s: GraphSettings, bag: BagFacts = None, link_mbit=0.0) -> Deploym
         raise ValueError('a deployment runs one drone per host: drones_per_process must be 1')
     bag = bag or BagFacts.read(s.bag, s.views)
     if not bag.compressed:
-        raise ValueError('a deployment sends compressed images over the links, never raw 1080p: '
-                         'write the bag with compressed images (matrix-tracker bag ... --compressed)')
+        raise ValueError(
+            'a deployment sends compressed images over the links, never raw 1080p: '
+            'write the bag with compressed images (matrix-tracker bag ... --compressed)'
+        )
     nodes = [_on_wall_clock(n) for n in graph_nodes(replace(s, lockstep=False), bag)]
     player = nodes.pop()
     hosts = {v: [n for n in nodes if n.namespace == v] for v in s.views}
     hosts[GROUND] = [n for n in nodes if n.namespace not in s.views]
-    hosts[GROUND] = [replace(n, parameters={**n.parameters, **LINK_IMAGES}) if n.executable == 'fuse' else n
-                     for n in hosts[GROUND]]
+    hosts[GROUND] = [
+        replace(n, parameters={**n.parameters, **LINK_IMAGES}) if n.executable == 'fuse' else n for n in hosts[GROUND]
+    ]
     for v in s.views:
-        own = [topics.absolute(v, topics.IMAGE_COMPRESSED)]   # as its camera would: this drone's streams only
+        own = [topics.absolute(v, topics.IMAGE_COMPRESSED)]  # as its camera would: this drone's streams only
         if bag.has_ground_truth:
             own.append(topics.absolute(v, topics.GROUND_TRUTH_CAMERA_INFO))
         # the camera's readers are the drone process and link_sender: as many as the one-host graph's
         # (drone and fuse), so the player's wait_for_subscribers holds
         budget = link_mbit.get(v, 0.0) if isinstance(link_mbit, dict) else link_mbit
-        hosts[v] += [NodeSpec('matrix_ros', 'link_sender', 'link_sender', v, {'link_mbit': float(budget)}),
-                     NodeSpec(player.package, player.executable, player.name, v,
-                              {**player.parameters, 'topics': own})]
+        hosts[v] += [
+            NodeSpec('matrix_ros', 'link_sender', 'link_sender', v, {'link_mbit': float(budget)}),
+            NodeSpec(player.package, player.executable, player.name, v, {**player.parameters, 'topics': own}),
+        ]
     return Deployment(hosts, {v: _link_streams(v, hosts[GROUND]) for v in s.views})
 
 
 def _on_wall_clock(node: NodeSpec) -> NodeSpec:
-    return replace(node, parameters={**node.parameters, 'use_sim_time': False}) \
-        if 'use_sim_time' in node.parameters else node
+    return (
+        replace(node, parameters={**node.parameters, 'use_sim_time': False})
+        if 'use_sim_time' in node.parameters
+        else node
+    )
 
 
 def ground_reads(node: NodeSpec, view: str) -> list:
@@ -146,5 +172,15 @@ def _link_streams(view: str, ground: list) -> list:
     for node in ground:
         for st in ground_reads(node, view):
             readers.setdefault(st, []).append(node.label)
-    return [LinkStream(st if st.startswith('/') else topics.drone_topic(view, st), STREAMS[st][0], UP,
-                       STREAMS[st][1], tuple(readers[st]), STREAMS[st][2]) for st in STREAMS if st in readers]
+    return [
+        LinkStream(
+            st if st.startswith('/') else topics.drone_topic(view, st),
+            STREAMS[st][0],
+            UP,
+            STREAMS[st][1],
+            tuple(readers[st]),
+            STREAMS[st][2],
+        )
+        for st in STREAMS
+        if st in readers
+    ]

@@ -15,18 +15,22 @@ from matrix_bringup.graph import share_file
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument('--profile', default=None,
-                        help='Fast DDS profile of the server (default: share/matrix_bringup/config/fastdds_server.xml)')
+    parser.add_argument(
+        '--profile',
+        default=None,
+        help='Fast DDS profile of the server (default: share/matrix_bringup/config/fastdds_server.xml)',
+    )
     args = parser.parse_args(argv)
     # Read by Fast DDS when rclpy creates the participant, so set before rclpy.init
-    os.environ['FASTRTPS_DEFAULT_PROFILES_FILE'] = args.profile or share_file('matrix_bringup', 'config',
-                                                                              'fastdds_server.xml')
+    os.environ['FASTRTPS_DEFAULT_PROFILES_FILE'] = args.profile or share_file(
+        'matrix_bringup', 'config', 'fastdds_server.xml'
+    )
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'SYSTEM_DEFAULT'
-    os.environ.pop('ROS_DISCOVERY_SERVER', None)   # it would make this participant a client
+    os.environ.pop('ROS_DISCOVERY_SERVER', None)  # it would make this participant a client
 
     import rclpy
 
-    from matrix_ros.params import spin_nodes   # imported after the environment is set: it loads rclpy
+    from matrix_ros.params import spin_nodes  # imported after the environment is set: it loads rclpy
 
     def server():
         node = rclpy.create_node('discovery_server')
@@ -34,6 +38,7 @@ def main(argv=None) -> int:
         return node
 
     return spin_nodes([server], [sys.argv[0]], description=__doc__)
+
 
 if __name__ == '__main__':
     sys.exit(main())

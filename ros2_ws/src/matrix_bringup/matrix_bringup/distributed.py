@@ -22,23 +22,32 @@ from matrix_bringup.graph import share_file
 from matrix_bringup.netns_harness import Hosts, address
 from matrix_bringup.run_graph import command
 
-SERVER_PORT = 11811   # of the discovery server (config/fastdds_server.xml, fastdds_client.xml)
+SERVER_PORT = 11811  # of the discovery server (config/fastdds_server.xml, fastdds_client.xml)
 # name -> (profile under share/matrix_bringup/config, ROS_AUTOMATIC_DISCOVERY_RANGE, other variables)
-DISCOVERY = {'multicast': ('fastdds_hosts.xml', 'SUBNET', {}),
-             'peers': ('fastdds_peers.xml', 'SYSTEM_DEFAULT', {}),
-             'server': ('fastdds_client.xml', 'SYSTEM_DEFAULT', {}),
-             'server_env': ('fastdds_hosts.xml', 'SYSTEM_DEFAULT',
-                            {'ROS_DISCOVERY_SERVER': f'{address(GROUND)}:{SERVER_PORT}'})}
-SERVED = ('server', 'server_env')   # discovery modes that need matrix_bringup.discovery_server on the ground
+DISCOVERY = {
+    'multicast': ('fastdds_hosts.xml', 'SUBNET', {}),
+    'peers': ('fastdds_peers.xml', 'SYSTEM_DEFAULT', {}),
+    'server': ('fastdds_client.xml', 'SYSTEM_DEFAULT', {}),
+    'server_env': ('fastdds_hosts.xml', 'SYSTEM_DEFAULT', {'ROS_DISCOVERY_SERVER': f'{address(GROUND)}:{SERVER_PORT}'}),
+}
+SERVED = ('server', 'server_env')  # discovery modes that need matrix_bringup.discovery_server on the ground
 
 
 def host_env(discovery: str = 'multicast') -> dict:
     """The environment of every process of a distributed run (ROS_DOMAIN_ID as this process's)."""
     profile, scope, extra = DISCOVERY[discovery]
-    env = {k: v for k, v in os.environ.items()
-           if k not in ('ROS_STATIC_PEERS', 'ROS_LOCALHOST_ONLY', 'ROS_DISCOVERY_SERVER')}
-    env.update({'ROS_AUTOMATIC_DISCOVERY_RANGE': scope,
-                'FASTRTPS_DEFAULT_PROFILES_FILE': share_file('matrix_bringup', 'config', profile), **extra})
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k not in ('ROS_STATIC_PEERS', 'ROS_LOCALHOST_ONLY', 'ROS_DISCOVERY_SERVER')
+    }
+    env.update(
+        {
+            'ROS_AUTOMATIC_DISCOVERY_RANGE': scope,
+            'FASTRTPS_DEFAULT_PROFILES_FILE': share_file('matrix_bringup', 'config', profile),
+            **extra,
+        }
+    )
     return env
 
 
@@ -46,8 +55,16 @@ def log_path(log_dir: Path, label: str) -> Path:
     return Path(log_dir) / (label.replace('/', '_') + '.log')
 
 
-def start(d: Deployment, hosts: Hosts, log_dir: Path, discovery: str = 'multicast', image_probes=(), captures=(),
-          player_lead_s: float = 10.0, timeout_s: float = 300.0) -> dict:
+def start(
+    d: Deployment,
+    hosts: Hosts,
+    log_dir: Path,
+    discovery: str = 'multicast',
+    image_probes=(),
+    captures=(),
+    player_lead_s: float = 10.0,
+    timeout_s: float = 300.0,
+) -> dict:
     """Start the discovery server on the ground if ``discovery`` needs one ('ground/discovery_server'), a
     ``link_probe`` of fuse's output on the ground (label 'ground/probe'), one of the images on each
     drone of ``image_probes`` ('Dn/probe'; its player then waits for that reader too), a ``link_capture`` of
@@ -64,9 +81,13 @@ def start(d: Deployment, hosts: Hosts, log_dir: Path, discovery: str = 'multicas
     for view in captures:
         names = [f'{h}={hosts.address(h)}' for h in hosts.hosts]
         run(view, f'{view}/capture', [sys.executable, '-m', 'matrix_bringup.link_capture', '--hosts', *names])
-    _wait(lambda: all(read_probe(log_path(log_dir, f'{v}/capture')) for v in captures), procs, 60.0,
-          'the link captures to start')
-    if discovery in SERVED:   # before its clients: they announce themselves to it only
+    _wait(
+        lambda: all(read_probe(log_path(log_dir, f'{v}/capture')) for v in captures),
+        procs,
+        60.0,
+        'the link captures to start',
+    )
+    if discovery in SERVED:  # before its clients: they announce themselves to it only
         run(GROUND, 'ground/discovery_server', [sys.executable, '-m', 'matrix_bringup.discovery_server'])
     probe = [sys.executable, '-m', 'matrix_bringup.link_probe']
     run(GROUND, 'ground/probe', [*probe, '--fuse'])
@@ -83,8 +104,11 @@ def start(d: Deployment, hosts: Hosts, log_dir: Path, discovery: str = 'multicas
     start_at = time.time() + player_lead_s
     for host, spec in players:
         extra = sum(1 for v in image_probes if v == host)
-        params = {**spec.parameters, 'start_at': start_at,
-                  'wait_for_subscribers': spec.parameters['wait_for_subscribers'] + extra}
+        params = {
+            **spec.parameters,
+            'start_at': start_at,
+            'wait_for_subscribers': spec.parameters['wait_for_subscribers'] + extra,
+        }
         spec = replace(spec, parameters=params)
         run(host, spec.label, command(spec))
     return procs
@@ -95,14 +119,17 @@ def restart(d: Deployment, hosts: Hosts, log_dir: Path, label: str, discovery: s
     ``log_dir/<label>_restarted.log``."""
     host = d.host_of(label)
     spec = next(n for n in d.hosts[host] if n.label == label)
-    return hosts.start(host, command(spec),
-                       log_path(log_dir, f'{label}_restarted'), host_env(discovery))
+    return hosts.start(host, command(spec), log_path(log_dir, f'{label}_restarted'), host_env(discovery))
 
 
 def _wait_connected(procs: dict, fuse_log: Path, drones: int, timeout_s: float) -> None:
     """Until fuse logged that every drone's geometry stream connected (its images are then subscribed)."""
-    _wait(lambda: Path(fuse_log).read_text().count('connected; images subscribed') >= drones, procs, timeout_s,
-          f'fuse to connect to all {drones} drones ({fuse_log})')
+    _wait(
+        lambda: Path(fuse_log).read_text().count('connected; images subscribed') >= drones,
+        procs,
+        timeout_s,
+        f'fuse to connect to all {drones} drones ({fuse_log})',
+    )
 
 
 def _wait(condition, procs: dict, timeout_s: float, what: str) -> None:
@@ -117,13 +144,14 @@ def _wait(condition, procs: dict, timeout_s: float, what: str) -> None:
 def read_probe(log: Path) -> list:
     """The JSON lines a probe or a capture wrote so far (its first line is its command)."""
     import json
+
     lines = Path(log).read_text().splitlines()[1:] if Path(log).is_file() else []
     out = []
     for line in lines:
         if line.startswith('{'):
             try:
                 out.append(json.loads(line))
-            except ValueError:   # a line being written
+            except ValueError:  # a line being written
                 pass
     return out
 
@@ -139,8 +167,12 @@ def write_replay_bag(dataset_dir, out, views, frames) -> Path:
     with SequenceBagWriter(out, views, compressed=True) as bag:
         for i, k in enumerate(frames):
             frame = ds.frames[k]
-            bag.write_frame(i, {v: ds.load_image(v, frame) for v in views},
-                            {v: ds.camera(v, frame) for v in views}, ds.pedestrian_positions(frame))
+            bag.write_frame(
+                i,
+                {v: ds.load_image(v, frame) for v in views},
+                {v: ds.camera(v, frame) for v in views},
+                ds.pedestrian_positions(frame),
+            )
     return Path(out)
 
 

@@ -34,73 +34,142 @@ from matrix_core.settings import setting_to_string
 _log = logging.getLogger(__name__)
 
 VIEWS = list(MATRIX_VIEWS)
-RECORDED = (('/tracks', 'matrix_msgs/msg/TrackArray'), ('/detections', 'matrix_msgs/msg/TrackArray'),
-            ('/bev_heatmap', 'nav_msgs/msg/OccupancyGrid'), ('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray'))
-PER_VIEW_RECORDED = (('camera_info', 'sensor_msgs/msg/CameraInfo'), ('pose', 'geometry_msgs/msg/PoseStamped'),
-                     ('homography', 'matrix_msgs/msg/HomographyStamped'),
-                     ('detections_2d', 'matrix_msgs/msg/Detection2DArray'))
-OVERLAY_RECORDED = ('overlay/compressed', 'sensor_msgs/msg/CompressedImage')   # with GraphSettings.overlay
-DRONE_NODES = ('calib', 'register')   # the nodes of a drone process (matrix_bringup.drone)
+RECORDED = (
+    ('/tracks', 'matrix_msgs/msg/TrackArray'),
+    ('/detections', 'matrix_msgs/msg/TrackArray'),
+    ('/bev_heatmap', 'nav_msgs/msg/OccupancyGrid'),
+    ('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray'),
+)
+PER_VIEW_RECORDED = (
+    ('camera_info', 'sensor_msgs/msg/CameraInfo'),
+    ('pose', 'geometry_msgs/msg/PoseStamped'),
+    ('homography', 'matrix_msgs/msg/HomographyStamped'),
+    ('detections_2d', 'matrix_msgs/msg/Detection2DArray'),
+)
+OVERLAY_RECORDED = ('overlay/compressed', 'sensor_msgs/msg/CompressedImage')  # with GraphSettings.overlay
+DRONE_NODES = ('calib', 'register')  # the nodes of a drone process (matrix_bringup.drone)
 
 
 @dataclass
 class GraphSettings:
     """Launch arguments of ``full_graph.launch.py`` and flags of ``run_graph`` (same names and defaults)."""
 
-    bag: str = field(default='', metadata={
-        'help': 'sequence bag to replay (matrix-tracker bag DATASET --out BAG, or matrix-tracker simulate --bag)'})
-    dataset: str = field(default='', metadata={
-        'help': "the MATRIX-format folder the bag came from: its reference/ images and calibrations are "
-                "register's references and calib's first prior"})
+    bag: str = field(
+        default='',
+        metadata={
+            'help': 'sequence bag to replay (matrix-tracker bag DATASET --out BAG, or matrix-tracker simulate --bag)'
+        },
+    )
+    dataset: str = field(
+        default='',
+        metadata={
+            'help': "the MATRIX-format folder the bag came from: its reference/ images and calibrations are "
+            "register's references and calib's first prior"
+        },
+    )
     views: list[str] = field(default_factory=lambda: list(VIEWS), metadata={'help': 'drones to run'})
-    drones_per_process: int = field(default=1, metadata={
-        'help': 'drones per calib and per register process: 1 = one process each per drone, in namespace /Dn '
-                '(as on one computer per drone); N > 1: processes calib_1, calib_2, ... with N drones each; '
-                '0 = one process each for all drones'})
-    drone_process: bool = field(default=True, metadata={
-        'help': "a drone's calib and register nodes in one process (drone): each image subscribed and decoded "
-                'once, its registration handed to calib in process; false: a calib and a register process'})
-    calib_config: str = field(default='', metadata={
-        'help': "calibration scene YAML (boards, intrinsics); empty: the shipped one for the dataset "
-                "(sim_<variant>.yaml for a simulated folder, else matrix_sample.yaml)"})
-    calib_registration: bool = field(default=True, metadata={
-        'help': "calib follows each drone's registration (use_registration: the camera the registration implies "
-                'predicts the boards, about 5x less calib time); false: calib measures the image motion itself'})
-    register_params: str = field(default='', metadata={
-        'help': 'ROS parameter file of register; empty: matrix_register/config/register.yaml'})
-    fuse_params: str = field(default='', metadata={
-        'help': 'ROS parameter file of fuse; empty: matrix_bev_tracker/config/fuse.yaml'})
-    input_kind: str = field(default='homography', metadata={
-        'help': "fuse on register's homographies (homography) or on calib's camera_info (camera_info)"})
+    drones_per_process: int = field(
+        default=1,
+        metadata={
+            'help': 'drones per calib and per register process: 1 = one process each per drone, in namespace /Dn '
+            '(as on one computer per drone); N > 1: processes calib_1, calib_2, ... with N drones each; '
+            '0 = one process each for all drones'
+        },
+    )
+    drone_process: bool = field(
+        default=True,
+        metadata={
+            'help': "a drone's calib and register nodes in one process (drone): each image subscribed and decoded "
+            'once, its registration handed to calib in process; false: a calib and a register process'
+        },
+    )
+    calib_config: str = field(
+        default='',
+        metadata={
+            'help': "calibration scene YAML (boards, intrinsics); empty: the shipped one for the dataset "
+            "(sim_<variant>.yaml for a simulated folder, else matrix_sample.yaml)"
+        },
+    )
+    calib_registration: bool = field(
+        default=True,
+        metadata={
+            'help': "calib follows each drone's registration (use_registration: the camera the registration implies "
+            'predicts the boards, about 5x less calib time); false: calib measures the image motion itself'
+        },
+    )
+    register_params: str = field(
+        default='', metadata={'help': 'ROS parameter file of register; empty: matrix_register/config/register.yaml'}
+    )
+    fuse_params: str = field(
+        default='', metadata={'help': 'ROS parameter file of fuse; empty: matrix_bev_tracker/config/fuse.yaml'}
+    )
+    input_kind: str = field(
+        default='homography',
+        metadata={'help': "fuse on register's homographies (homography) or on calib's camera_info (camera_info)"},
+    )
     checkpoint: str = field(default='', metadata={'help': 'BEV checkpoint (.pt); empty: the fuse node default'})
-    overlay: bool = field(default=False, metadata={
-        'help': "fuse also publishes (and the recorder records) each drone's image with the tracks' boxes and ids "
-                'drawn (Dn/overlay/compressed)'})
-    sync_timeout: float = field(default=5.0, metadata={
-        'help': 'seconds the fuse node waits for a late drone before fusing without it (without lockstep; '
-                'in lockstep it waits lockstep_timeout, so that every view is fused)'})
-    lockstep: bool = field(default=True, metadata={
-        'help': 'true: the next frame leaves the bag once the last one is processed (deterministic); '
-                'false: the recorded timing scaled by rate'})
-    lockstep_timeout: float = field(default=120.0, metadata={
-        'help': 'seconds the player waits for a frame to be processed before going on (logged)'})
-    lockstep_window: int = field(default=2, metadata={
-        'help': 'lockstep: frames out at once; 2: the next frame leaves while fuse finishes the last (the drones '
-                'register it meanwhile: faster, the same results), 1: one frame through the whole graph at a time'})
+    overlay: bool = field(
+        default=False,
+        metadata={
+            'help': "fuse also publishes (and the recorder records) each drone's image with the tracks' boxes and ids "
+            'drawn (Dn/overlay/compressed)'
+        },
+    )
+    sync_timeout: float = field(
+        default=5.0,
+        metadata={
+            'help': 'seconds the fuse node waits for a late drone before fusing without it (without lockstep; '
+            'in lockstep it waits lockstep_timeout, so that every view is fused)'
+        },
+    )
+    lockstep: bool = field(
+        default=True,
+        metadata={
+            'help': 'true: the next frame leaves the bag once the last one is processed (deterministic); '
+            'false: the recorded timing scaled by rate'
+        },
+    )
+    lockstep_timeout: float = field(
+        default=120.0,
+        metadata={'help': 'seconds the player waits for a frame to be processed before going on (logged)'},
+    )
+    lockstep_window: int = field(
+        default=2,
+        metadata={
+            'help': 'lockstep: frames out at once; 2: the next frame leaves while fuse finishes the last (the drones '
+            'register it meanwhile: faster, the same results), 1: one frame through the whole graph at a time'
+        },
+    )
     rate: float = field(default=1.0, metadata={'help': 'replay speed without lockstep'})
-    record: str = field(default='', metadata={
-        'help': 'bag folder the recorder creates (must not exist; tracks as MOT text beside it); empty: no recorder'})
-    monitor: bool = field(default=False, metadata={
-        'help': "also run graph_monitor: scores calib and register against the bag's ground truth and paces "
-                'lockstep on every stage (needs ground_truth/camera_info in the bag)'})
+    record: str = field(
+        default='',
+        metadata={
+            'help': 'bag folder the recorder creates (must not exist; tracks as MOT text beside it); empty: no recorder'
+        },
+    )
+    monitor: bool = field(
+        default=False,
+        metadata={
+            'help': "also run graph_monitor: scores calib and register against the bag's ground truth and paces "
+            'lockstep on every stage (needs ground_truth/camera_info in the bag)'
+        },
+    )
     monitor_out: str = field(default='out/graph_monitor', metadata={'help': "graph_monitor's table and picture"})
-    drone_niceness: int = field(default=10, metadata={
-        'help': 'niceness (0-19) of the drone processes (calib, register): on one computer a frame in fuse is '
-                "not held up by the next frame's registrations, which wait instead (the latency at 2 Hz); "
-                '0 = the same priority as fuse'})
-    dds_profile: str = field(default='', metadata={
-        'help': 'Fast DDS profile XML for every node, e.g. share/matrix_bringup/config/fastdds.xml (large images '
-                "in shared memory, 0.1 s heartbeat); empty: the environment's FASTRTPS_DEFAULT_PROFILES_FILE"})
+    drone_niceness: int = field(
+        default=10,
+        metadata={
+            'help': 'niceness (0-19) of the drone processes (calib, register): on one computer a frame in fuse is '
+            "not held up by the next frame's registrations, which wait instead (the latency at 2 Hz); "
+            '0 = the same priority as fuse'
+        },
+    )
+    dds_profile: str = field(
+        default='',
+        metadata={
+            'help': 'Fast DDS profile XML for every node, e.g. share/matrix_bringup/config/fastdds.xml (large images '
+            "in shared memory, 0.1 s heartbeat); empty: the environment's FASTRTPS_DEFAULT_PROFILES_FILE"
+        },
+    )
 
     def __post_init__(self):
         if self.input_kind not in ('homography', 'camera_info'):
@@ -198,30 +267,37 @@ class BagFacts:
     def read(cls, bag: str, views) -> 'BagFacts':
         if not (Path(bag) / 'metadata.yaml').is_file():
             raise FileNotFoundError(f'not a rosbag2 folder (no metadata.yaml): {bag!r}')
-        topics, damage = topic_counts(bag)   # a damaged bag: what it holds before the damage (the player plays
-        if damage:                           # that and exits with code 4)
+        topics, damage = topic_counts(bag)  # a damaged bag: what it holds before the damage (the player plays
+        if damage:  # that and exits with code 4)
             _log.warning(f'{damage}: replaying the frames before the damage')
         imaged = {t.split('/')[1] for t in topics if t.endswith(('/image_raw', '/image/compressed'))}
         unknown = [v for v in views if v not in imaged]
         if unknown:
-            raise ValueError(f'{bag}: no images of view(s) {", ".join(unknown)} in this bag; '
-                             f'it has images of {", ".join(sorted(imaged)) or "no view"}')
+            raise ValueError(
+                f'{bag}: no images of view(s) {", ".join(unknown)} in this bag; '
+                f'it has images of {", ".join(sorted(imaged)) or "no view"}'
+            )
         raw = [topics[t][1] for v in views if (t := f'/{v}/image_raw') in topics]
         compressed = [topics[t][1] for v in views if (t := f'/{v}/image/compressed') in topics]
         if len(raw) + len(compressed) != len(views) or (raw and compressed):
-            raise ValueError(f'{bag}: expected one image topic per view ({views}), all raw or all compressed; '
-                             f'it has {sorted(t for t in topics if "image" in t)}')
+            raise ValueError(
+                f'{bag}: expected one image topic per view ({views}), all raw or all compressed; '
+                f'it has {sorted(t for t in topics if "image" in t)}'
+            )
         gt = all(f'/{v}/ground_truth/camera_info' in topics for v in views)
-        drone = [t.split('/')[1] for t in topics]   # '/D3/image_raw' -> 'D3'
+        drone = [t.split('/')[1] for t in topics]  # '/D3/image_raw' -> 'D3'
         played = tuple(sorted(t for t, d in zip(topics, drone) if d in views or not re.fullmatch(r'D\d+', d)))
         return cls(bool(compressed), max(raw or compressed), gt, played)
 
 
 def player_exit_text(code: int) -> str:
     """What the bag player's exit code means (matrix_ros.bag_player), for run_graph's and the launch's logs."""
-    return {0: ' (every frame played and processed)', 1: ' (nothing was played)',
-            3: ' (lockstep timed out for some frame)',
-            4: ' (the bag is damaged: only the frames before the damage were played)'}.get(code, '')
+    return {
+        0: ' (every frame played and processed)',
+        1: ' (nothing was played)',
+        3: ' (lockstep timed out for some frame)',
+        4: ' (the bag is damaged: only the frames before the damage were played)',
+    }.get(code, '')
 
 
 def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
@@ -234,52 +310,125 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
     if s.monitor and not bag.has_ground_truth:
         raise ValueError(f'{s.bag} has no ground_truth/camera_info for every view: the monitor cannot score')
     sim = {'use_sim_time': True}
-    calib = {'config': s.calib_config or str(config_for_dataset(s.dataset)), 'prior_dataset': s.dataset,
-             'qos': 'reliable', 'compressed': bag.compressed, 'use_registration': s.calib_registration, **sim}
-    if s.calib_registration and s.lockstep:   # as the fuse node: wait as long as the player, deterministic
+    calib = {
+        'config': s.calib_config or str(config_for_dataset(s.dataset)),
+        'prior_dataset': s.dataset,
+        'qos': 'reliable',
+        'compressed': bag.compressed,
+        'use_registration': s.calib_registration,
+        **sim,
+    }
+    if s.calib_registration and s.lockstep:  # as the fuse node: wait as long as the player, deterministic
         calib['registration_wait_s'] = s.lockstep_timeout
     register = {'reference_dataset': s.dataset, 'compressed': bag.compressed, **sim}
     register_files = [s.register_params or share_file('matrix_register', 'config', 'register.yaml')]
     size = s.drones_per_process or len(s.views)
-    groups = [list(s.views[i:i + size]) for i in range(0, len(s.views), size)]
+    groups = [list(s.views[i : i + size]) for i in range(0, len(s.views), size)]
     nodes = []
     for k, group in enumerate(groups, 1):
         ns = group[0] if size == 1 else ''
         suffix = f'_{k}' if size > 1 and len(groups) > 1 else ''
-        if s.drone_process:   # one process, the nodes keep their names: /Dn/calib, /Dn/register, calib_2, ...
-            nodes.append(NodeSpec('matrix_bringup', 'drone', f'drone{suffix}', ns,
-                                  {**calib, **register, 'views': group}, register_files, renamed=False,
-                                  remaps={f'{n}:__node': f'{n}{suffix}' for n in DRONE_NODES if suffix},
-                                  niceness=s.drone_niceness))
+        if s.drone_process:  # one process, the nodes keep their names: /Dn/calib, /Dn/register, calib_2, ...
+            nodes.append(
+                NodeSpec(
+                    'matrix_bringup',
+                    'drone',
+                    f'drone{suffix}',
+                    ns,
+                    {**calib, **register, 'views': group},
+                    register_files,
+                    renamed=False,
+                    remaps={f'{n}:__node': f'{n}{suffix}' for n in DRONE_NODES if suffix},
+                    niceness=s.drone_niceness,
+                )
+            )
             continue
-        nodes += [NodeSpec('matrix_calib', 'calib', f'calib{suffix}', ns, {**calib, 'views': group},
-                           niceness=s.drone_niceness),
-                  NodeSpec('matrix_register', 'register', f'register{suffix}', ns, {**register, 'views': group},
-                           register_files, niceness=s.drone_niceness)]
+        nodes += [
+            NodeSpec(
+                'matrix_calib', 'calib', f'calib{suffix}', ns, {**calib, 'views': group}, niceness=s.drone_niceness
+            ),
+            NodeSpec(
+                'matrix_register',
+                'register',
+                f'register{suffix}',
+                ns,
+                {**register, 'views': group},
+                register_files,
+                niceness=s.drone_niceness,
+            ),
+        ]
     # In lockstep the fuse node waits as long as the player: every view is fused, results are deterministic.
-    fuse = {'views': list(s.views), 'input_kind': s.input_kind, 'image_kind': 'compressed' if bag.compressed else 'raw',
-            'sync_timeout': s.lockstep_timeout if s.lockstep else s.sync_timeout,
-            'scene_dataset': s.dataset, **({'overlay': True} if s.overlay else {}),
-            **({'checkpoint': s.checkpoint} if s.checkpoint else {}), **sim}
-    nodes.append(NodeSpec('matrix_bev_tracker', 'fuse', 'fuse', '', fuse,
-                          [s.fuse_params or share_file('matrix_bev_tracker', 'config', 'fuse.yaml')]))
+    fuse = {
+        'views': list(s.views),
+        'input_kind': s.input_kind,
+        'image_kind': 'compressed' if bag.compressed else 'raw',
+        'sync_timeout': s.lockstep_timeout if s.lockstep else s.sync_timeout,
+        'scene_dataset': s.dataset,
+        **({'overlay': True} if s.overlay else {}),
+        **({'checkpoint': s.checkpoint} if s.checkpoint else {}),
+        **sim,
+    }
+    nodes.append(
+        NodeSpec(
+            'matrix_bev_tracker',
+            'fuse',
+            'fuse',
+            '',
+            fuse,
+            [s.fuse_params or share_file('matrix_bev_tracker', 'config', 'fuse.yaml')],
+        )
+    )
     if s.record:
         per_view = PER_VIEW_RECORDED + ((OVERLAY_RECORDED,) if s.overlay else ())
         topics = [*RECORDED, *((f'/{v}/{t}', m) for v in s.views for t, m in per_view)]
-        nodes.append(NodeSpec('matrix_ros', 'recorder', 'recorder', '', {
-            'out': s.record, 'topics': [t for t, _ in topics], 'types': [m for _, m in topics],
-            'tracks_topic': '/tracks', 'sequence_bag': str(s.bag), **sim}))
+        nodes.append(
+            NodeSpec(
+                'matrix_ros',
+                'recorder',
+                'recorder',
+                '',
+                {
+                    'out': s.record,
+                    'topics': [t for t, _ in topics],
+                    'types': [m for _, m in topics],
+                    'tracks_topic': '/tracks',
+                    'sequence_bag': str(s.bag),
+                    **sim,
+                },
+            )
+        )
     if s.monitor:
-        nodes.append(NodeSpec('matrix_bringup', 'graph_monitor', 'graph_monitor', '', {
-            'views': list(s.views), 'expected_frames': bag.frames, 'wait_for': ['register', 'calib', 'tracks'],
-            'idle_timeout': s.lockstep_timeout, 'out_dir': s.monitor_out}))
+        nodes.append(
+            NodeSpec(
+                'matrix_bringup',
+                'graph_monitor',
+                'graph_monitor',
+                '',
+                {
+                    'views': list(s.views),
+                    'expected_frames': bag.frames,
+                    'wait_for': ['register', 'calib', 'tracks'],
+                    'idle_timeout': s.lockstep_timeout,
+                    'out_dir': s.monitor_out,
+                },
+            )
+        )
     # Every image topic is read by calib and register (or drone) and fuse (the monitor reads raw images too).
     readers = (2 if s.drone_process else 3) + (1 if s.monitor and not bag.compressed else 0)
-    player = {'bag': s.bag, 'rate': s.rate, 'wait_for_subscribers': readers, 'lockstep': s.lockstep,
-              'lockstep_timeout': s.lockstep_timeout, 'lockstep_window': s.lockstep_window,
-              **({'topics': list(bag.topics)} if bag.topics else {})}
+    player = {
+        'bag': s.bag,
+        'rate': s.rate,
+        'wait_for_subscribers': readers,
+        'lockstep': s.lockstep,
+        'lockstep_timeout': s.lockstep_timeout,
+        'lockstep_window': s.lockstep_window,
+        **({'topics': list(bag.topics)} if bag.topics else {}),
+    }
     if s.lockstep:
-        player.update({'lockstep_topic': '/graph_monitor/frame_done', 'lockstep_type': 'std_msgs/msg/Header'}
-                      if s.monitor else {'lockstep_topic': '/tracks', 'lockstep_type': 'matrix_msgs/msg/TrackArray'})
+        player.update(
+            {'lockstep_topic': '/graph_monitor/frame_done', 'lockstep_type': 'std_msgs/msg/Header'}
+            if s.monitor
+            else {'lockstep_topic': '/tracks', 'lockstep_type': 'matrix_msgs/msg/TrackArray'}
+        )
     nodes.append(NodeSpec('matrix_ros', 'bag_player', 'bag_player', '', player))
     return nodes

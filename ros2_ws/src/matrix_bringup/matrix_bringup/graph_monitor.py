@@ -30,8 +30,13 @@ from std_msgs.msg import Header
 from matrix_bringup.monitor_settings import GraphMonitorSettings
 from matrix_core import topics
 from matrix_core.evaluation.graph_report import write_graph_report
-from matrix_ros.conversions import (ConversionError, camera_info_to_camera, msg_to_image, registration_from_msg,
-                                    stamp_to_seconds)
+from matrix_ros.conversions import (
+    ConversionError,
+    camera_info_to_camera,
+    msg_to_image,
+    registration_from_msg,
+    stamp_to_seconds,
+)
 from matrix_ros.executor import make_executor
 from matrix_ros.params import declare_settings, parse_node_args
 from matrix_ros.qos import publisher_qos, qos_by_name
@@ -48,24 +53,42 @@ class GraphMonitor(Node):
         self.done = False
         history = qos_by_name('history', depth=50)
         for view in s.views:
-            self.create_subscription(CameraInfo, topics.drone_topic(view, topics.GROUND_TRUTH_CAMERA_INFO),
-                                     lambda m, v=view: self._camera(self.truth, v, m), history)
-            self.create_subscription(CameraInfo, topics.drone_topic(view, topics.CAMERA_INFO),
-                                     lambda m, v=view: self._camera(self.estimated, v, m), history)
-            self.create_subscription(HomographyStamped, topics.drone_topic(view, topics.HOMOGRAPHY),
-                                     lambda m, v=view: self._homography(v, m), history)
-            self.create_subscription(Image, topics.drone_topic(view, topics.IMAGE_RAW), lambda m, v=view: self._image(v, m),
-                                     qos_by_name('reliable', depth=2))
-        self.create_subscription(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, self._diagnostics, qos_by_name('history', 200))
+            self.create_subscription(
+                CameraInfo,
+                topics.drone_topic(view, topics.GROUND_TRUTH_CAMERA_INFO),
+                lambda m, v=view: self._camera(self.truth, v, m),
+                history,
+            )
+            self.create_subscription(
+                CameraInfo,
+                topics.drone_topic(view, topics.CAMERA_INFO),
+                lambda m, v=view: self._camera(self.estimated, v, m),
+                history,
+            )
+            self.create_subscription(
+                HomographyStamped,
+                topics.drone_topic(view, topics.HOMOGRAPHY),
+                lambda m, v=view: self._homography(v, m),
+                history,
+            )
+            self.create_subscription(
+                Image,
+                topics.drone_topic(view, topics.IMAGE_RAW),
+                lambda m, v=view: self._image(v, m),
+                qos_by_name('reliable', depth=2),
+            )
+        self.create_subscription(
+            DiagnosticArray, topics.DIAGNOSTICS_TOPIC, self._diagnostics, qos_by_name('history', 200)
+        )
         if 'tracks' in s.wait_for:
             self.create_subscription(TrackArray, s.tracks_topic, self._tracks, history)
         self.frame_done_pub = self.create_publisher(Header, FRAME_DONE_TOPIC, publisher_qos())
-        self.processed = {}   # stamp -> {(stage, view)} seen; view '' for tracks
+        self.processed = {}  # stamp -> {(stage, view)} seen; view '' for tracks
         self.needed = {(stage, v) for stage in s.wait_for if stage != 'tracks' for v in s.views}
         self.needed |= {('tracks', '')} if 'tracks' in s.wait_for else set()
         self.announced = set()
-        self.first_seen = {}   # stamp -> monotonic time of the frame's first message (any topic)
-        self.warned = set()    # stamps warned about (waiting_warning)
+        self.first_seen = {}  # stamp -> monotonic time of the frame's first message (any topic)
+        self.warned = set()  # stamps warned about (waiting_warning)
         self.create_timer(0.5, self._check)
 
     def _key(self, view, msg):
@@ -134,13 +157,16 @@ class GraphMonitor(Node):
             if stamp in self.announced or stamp in self.warned or now - first < self.settings.waiting_warning:
                 continue
             self.warned.add(stamp)
-            self.get_logger().warning(f'frame t={stamp:.3f} s not done {now - first:.0f} s after its first '
-                                      f'message; waiting for {", ".join(self.missing(stamp))}')
+            self.get_logger().warning(
+                f'frame t={stamp:.3f} s not done {now - first:.0f} s after its first '
+                f'message; waiting for {", ".join(self.missing(stamp))}'
+            )
 
     def finish(self):
         s = self.settings
-        self.scored = write_graph_report(s.out_dir, s.views, s.area, self.truth, self.estimated, self.homography,
-                                         self.images)
+        self.scored = write_graph_report(
+            s.out_dir, s.views, s.area, self.truth, self.estimated, self.homography, self.images
+        )
         self.done = True
 
 
@@ -152,7 +178,7 @@ def main(argv=None) -> int:
     try:
         while rclpy.ok() and not node.done:
             executor.spin_once(timeout_sec=0.2)
-    except (KeyboardInterrupt, ExternalShutdownException):   # SIGINT, or SIGTERM through rclpy's handler
+    except (KeyboardInterrupt, ExternalShutdownException):  # SIGINT, or SIGTERM through rclpy's handler
         node.finish()
     scored = getattr(node, 'scored', 0)
     executor.shutdown()

@@ -32,16 +32,16 @@ def main(argv=None) -> int:
     hosts = dict(reversed(h.split('=', 1)) for h in args.hosts)
     counter = StreamCounter(hosts)
     sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(ETH_P_ALL))
-    sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 8 << 20)   # bursts of image fragments
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 8 << 20)  # bursts of image fragments
     sock.bind((args.dev, 0))
-    _print(counter)   # capturing: the first (empty) totals
+    _print(counter)  # capturing: the first (empty) totals
     stop = []
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
     next_print = time.monotonic() + args.every
     while not stop:
         if select.select([sock], [], [], 0.2)[0]:
             try:
-                while True:   # drain: a burst of image fragments
+                while True:  # drain: a burst of image fragments
                     frame, address = sock.recvfrom(65535, socket.MSG_DONTWAIT)
                     counter.add(frame, address[2] == PACKET_OUTGOING)
             except BlockingIOError:

@@ -45,10 +45,10 @@ def _on_diagnostics(msg) -> None:
     if 'fuse' not in by_name:
         return
     values = _values(by_name['fuse'])
-    missing = {s.hardware_id: s.message for name, s in by_name.items()
-               if name.startswith('fuse/') and s.message != 'used'}
-    _emit(kind='fuse', stamp=_stamp(msg), views_used=int(values['views_used']), sync=values['sync'],
-          missing=missing)
+    missing = {
+        s.hardware_id: s.message for name, s in by_name.items() if name.startswith('fuse/') and s.message != 'used'
+    }
+    _emit(kind='fuse', stamp=_stamp(msg), views_used=int(values['views_used']), sync=values['sync'], missing=missing)
 
 
 def main(argv=None) -> int:
@@ -60,15 +60,26 @@ def main(argv=None) -> int:
     rclpy.init()
     node = rclpy.create_node('link_probe')
     if args.fuse:
-        node.create_subscription(TrackArray, topics.TRACKS, lambda m: _emit(
-            kind='tracks', stamp=_stamp(m), ids=[t.id for t in m.tracks]), qos_by_name('history', 100))
-        node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, _on_diagnostics,
-                                 qos_by_name('history', 100))
-    for views, stream, qos in ((args.images, topics.IMAGE_COMPRESSED, 'sensor_data'),
-                               (args.link, topics.LINK_IMAGE_COMPRESSED, 'sensor_data')):
+        node.create_subscription(
+            TrackArray,
+            topics.TRACKS,
+            lambda m: _emit(kind='tracks', stamp=_stamp(m), ids=[t.id for t in m.tracks]),
+            qos_by_name('history', 100),
+        )
+        node.create_subscription(
+            DiagnosticArray, topics.DIAGNOSTICS_TOPIC, _on_diagnostics, qos_by_name('history', 100)
+        )
+    for views, stream, qos in (
+        (args.images, topics.IMAGE_COMPRESSED, 'sensor_data'),
+        (args.link, topics.LINK_IMAGE_COMPRESSED, 'sensor_data'),
+    ):
         for view in views:
-            node.create_subscription(CompressedImage, topics.drone_topic(view, stream), lambda m, v=view: _emit(
-                kind='image', view=v, stamp=_stamp(m), bytes=len(m.data)), qos_by_name(qos))
+            node.create_subscription(
+                CompressedImage,
+                topics.drone_topic(view, stream),
+                lambda m, v=view: _emit(kind='image', view=v, stamp=_stamp(m), bytes=len(m.data)),
+                qos_by_name(qos),
+            )
     print(json.dumps({'kind': 'ready'}), flush=True)
     try:
         rclpy.spin(node)

@@ -31,8 +31,8 @@ import time
 from pathlib import Path
 
 GROUND = 'ground'
-SUBNET = '10.213.0'                     # private /24 of the harness (only inside its namespaces)
-_PREFIX = 'mxh'                         # namespace names: mxh<pid>-<host>
+SUBNET = '10.213.0'  # private /24 of the harness (only inside its namespaces)
+_PREFIX = 'mxh'  # namespace names: mxh<pid>-<host>
 _NAME = re.compile(rf'^{_PREFIX}(\d+)-')
 
 
@@ -88,9 +88,10 @@ def _kill_pids(pids) -> None:
             pass
 
 
-def _die_with_parent():   # in the child between fork and exec: SIGTERM when the harness process dies
+def _die_with_parent():  # in the child between fork and exec: SIGTERM when the harness process dies
     import ctypes
-    ctypes.CDLL('libc.so.6', use_errno=True).prctl(1, signal.SIGTERM)   # PR_SET_PDEATHSIG
+
+    ctypes.CDLL('libc.so.6', use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
 
 
 class Hosts:
@@ -105,7 +106,7 @@ class Hosts:
     def __init__(self, drones, rate_mbit: float = None, multicast: bool = True):
         self.drones, self.rate_mbit, self.multicast = list(drones), rate_mbit, multicast
         self.tag = f'{_PREFIX}{os.getpid()}'
-        self.procs = []          # (host, Popen)
+        self.procs = []  # (host, Popen)
         self._up = False
 
     def ns(self, host: str) -> str:
@@ -179,8 +180,12 @@ class Hosts:
         fit in the queue is dropped at the sender's end."""
         args = ['root', 'tbf', 'rate', f'{rate_mbit}mbit', 'burst', f'{burst_kb}kb', 'limit', f'{queue_kb}kb']
         for ns, dev in ((self.ns(drone), 'eth0'), (self.ns(GROUND), self.ground_end(drone))):
-            subprocess.run(['ip', 'netns', 'exec', ns, 'tc', 'qdisc', 'replace', 'dev', dev, *args], check=True,
-                           capture_output=True, text=True)
+            subprocess.run(
+                ['ip', 'netns', 'exec', ns, 'tc', 'qdisc', 'replace', 'dev', dev, *args],
+                check=True,
+                capture_output=True,
+                text=True,
+            )
 
     def cut(self, drone: str) -> None:
         """The drone's link goes down (nothing passes either way) until :meth:`restore`."""
@@ -193,23 +198,31 @@ class Hosts:
         """Bytes and packets that crossed the drone's link so far: {'up': (bytes, packets), 'down': ...,
         'dropped': packets the limit dropped at the drone's end}."""
         stats = json.loads(_ip('-n', self.ns(drone), '-s', '-j', 'link', 'show', 'dev', 'eth0').stdout)[0]['stats64']
-        qdisc = subprocess.run(['ip', 'netns', 'exec', self.ns(drone), 'tc', '-s', '-j', 'qdisc', 'show', 'dev',
-                                'eth0'], capture_output=True, text=True).stdout
+        qdisc = subprocess.run(
+            ['ip', 'netns', 'exec', self.ns(drone), 'tc', '-s', '-j', 'qdisc', 'show', 'dev', 'eth0'],
+            capture_output=True,
+            text=True,
+        ).stdout
         dropped = sum(q.get('drops', 0) for q in json.loads(qdisc or '[]'))
-        return {'up': (stats['tx']['bytes'], stats['tx']['packets']),
-                'down': (stats['rx']['bytes'], stats['rx']['packets']), 'dropped': dropped}
+        return {
+            'up': (stats['tx']['bytes'], stats['tx']['packets']),
+            'down': (stats['rx']['bytes'], stats['rx']['packets']),
+            'dropped': dropped,
+        }
 
     def udp_ports(self, host: str) -> set:
         """Local UDP ports bound in the host (``ss``)."""
-        out = subprocess.run(['ip', 'netns', 'exec', self.ns(host), 'ss', '-uanH'], capture_output=True, text=True,
-                             check=True).stdout
+        out = subprocess.run(
+            ['ip', 'netns', 'exec', self.ns(host), 'ss', '-uanH'], capture_output=True, text=True, check=True
+        ).stdout
         return {int(line.split()[3].rsplit(':', 1)[1]) for line in out.splitlines() if line.strip()}
 
     def udp_errors(self, host: str) -> dict:
         """The host's UDP counters of datagrams lost on receipt (/proc/net/snmp of its namespace):
         {'RcvbufErrors': n (socket buffer full), 'InErrors': n, ...}."""
-        text = subprocess.run(['ip', 'netns', 'exec', self.ns(host), 'cat', '/proc/net/snmp'], capture_output=True,
-                              text=True, check=True).stdout
+        text = subprocess.run(
+            ['ip', 'netns', 'exec', self.ns(host), 'cat', '/proc/net/snmp'], capture_output=True, text=True, check=True
+        ).stdout
         names, values = [line.split()[1:] for line in text.splitlines() if line.startswith('Udp:')][:2]
         return {k: int(v) for k, v in zip(names, values) if 'Err' in k}
 
@@ -220,8 +233,13 @@ class Hosts:
         with open(log, 'w') as out:
             out.write(' '.join(map(str, cmd)) + '\n')
             out.flush()
-            proc = subprocess.Popen(['ip', 'netns', 'exec', self.ns(host), *map(str, cmd)], stdout=out,
-                                    stderr=subprocess.STDOUT, env=env, preexec_fn=_die_with_parent)
+            proc = subprocess.Popen(
+                ['ip', 'netns', 'exec', self.ns(host), *map(str, cmd)],
+                stdout=out,
+                stderr=subprocess.STDOUT,
+                env=env,
+                preexec_fn=_die_with_parent,
+            )
         self.procs.append((host, proc))
         return proc
 
@@ -257,7 +275,7 @@ class Hosts:
         finally:
             for host in self.hosts:
                 _kill_pids(_ns_pids(self.ns(host)))
-            for host in reversed(self.hosts):   # drones first; the ground's deletion removes the bridge
+            for host in reversed(self.hosts):  # drones first; the ground's deletion removes the bridge
                 _ip('netns', 'delete', self.ns(host), check=False)
             atexit.unregister(self.close)
             if signal.getsignal(signal.SIGTERM) == self._on_sigterm:

@@ -33,13 +33,15 @@ class ReplayEnd:
     def __init__(self, actions: dict, player: str, monitor: str = None, monitor_timeout_s: float = 120.0):
         self.actions, self.player, self.monitor = actions, player, monitor
         self.monitor_timeout_s = monitor_timeout_s
-        self.exited = {}      # label -> exit code, of the player and the monitor
-        self.ending = False   # once true, processes exit because the launch stops them
+        self.exited = {}  # label -> exit code, of the player and the monitor
+        self.ending = False  # once true, processes exit because the launch stops them
 
     def handlers(self) -> list:
         """One ``OnProcessExit`` per node; put them before the nodes in the launch description."""
-        return [RegisterEventHandler(OnProcessExit(target_action=action, on_exit=self._on_exit(label)))
-                for label, action in self.actions.items()]
+        return [
+            RegisterEventHandler(OnProcessExit(target_action=action, on_exit=self._on_exit(label)))
+            for label, action in self.actions.items()
+        ]
 
     def _on_exit(self, label):
         return lambda event, context: self._exited(label, event.returncode)
@@ -58,14 +60,27 @@ class ReplayEnd:
         self.exited[label] = code
         if self.player not in self.exited:
             return None
-        if self.monitor and self.monitor not in self.exited:   # its scores come after the last frame
-            return [TimerAction(period=self.monitor_timeout_s, actions=[OpaqueFunction(
-                function=lambda _: self._end(f'{self.monitor} did not finish within '
-                                             f'{self.monitor_timeout_s:g} s of the last frame'))])]
+        if self.monitor and self.monitor not in self.exited:  # its scores come after the last frame
+            return [
+                TimerAction(
+                    period=self.monitor_timeout_s,
+                    actions=[
+                        OpaqueFunction(
+                            function=lambda _: self._end(
+                                f'{self.monitor} did not finish within {self.monitor_timeout_s:g} s of the last frame'
+                            )
+                        )
+                    ],
+                )
+            ]
         if self.monitor:
             return self._end('the bag was played and the monitor wrote its scores')
-        return [TimerAction(period=SETTLE_S, actions=[OpaqueFunction(
-            function=lambda _: self._end(f'the bag was played{player_exit_text(0)}'))])]
+        return [
+            TimerAction(
+                period=SETTLE_S,
+                actions=[OpaqueFunction(function=lambda _: self._end(f'the bag was played{player_exit_text(0)}'))],
+            )
+        ]
 
     def _end(self, reason: str) -> list:
         if self.ending:

@@ -44,7 +44,7 @@ def command(spec: NodeSpec) -> list:
     return [*spec.prefix, str(executable_path(spec.package, spec.executable)), *spec.ros_args()]
 
 
-def _die_with_parent():   # runs in the child between fork and exec
+def _die_with_parent():  # runs in the child between fork and exec
     ctypes.CDLL('libc.so.6', use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
@@ -55,7 +55,7 @@ class Graph:
     def __init__(self, log_dir: Path, dds_profile: str = ''):
         self.log_dir = Path(log_dir)
         self.env = {**os.environ, 'FASTRTPS_DEFAULT_PROFILES_FILE': dds_profile} if dds_profile else None
-        self.procs = {}   # label -> Popen
+        self.procs = {}  # label -> Popen
 
     def start(self, spec: NodeSpec) -> None:
         self.log_dir.mkdir(parents=True, exist_ok=True)
@@ -63,8 +63,9 @@ class Graph:
         log = open(self.log_path(spec), 'w')
         log.write(' '.join(cmd) + '\n')
         log.flush()
-        self.procs[spec.label] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=self.env,
-                                                  preexec_fn=_die_with_parent)
+        self.procs[spec.label] = subprocess.Popen(
+            cmd, stdout=log, stderr=subprocess.STDOUT, env=self.env, preexec_fn=_die_with_parent
+        )
         log.close()
 
     def log_path(self, spec: NodeSpec) -> Path:
@@ -76,9 +77,9 @@ class Graph:
         for label, p in self.procs.items():
             try:
                 fields = Path(f'/proc/{p.pid}/stat').read_text().rsplit(')', 1)[1].split()
-            except OSError:   # exited
+            except OSError:  # exited
                 continue
-            out[label] = (int(fields[11]) + int(fields[12])) / tick   # utime, stime
+            out[label] = (int(fields[11]) + int(fields[12])) / tick  # utime, stime
         return out
 
     def died(self, exclude=()) -> list:
@@ -115,15 +116,15 @@ def run(settings: GraphSettings, log_dir: Path, stop_timeout: float = 10.0, echo
             if crashed:
                 break
             time.sleep(0.2)
-        if monitor and not crashed and not interrupted:   # the monitor settles, prints and writes its scores
+        if monitor and not crashed and not interrupted:  # the monitor settles, prints and writes its scores
             deadline = time.monotonic() + settings.lockstep_timeout
             while not interrupted and graph.procs[monitor].poll() is None and time.monotonic() < deadline:
                 time.sleep(0.2)
         else:
-            time.sleep(1.0)   # the recorder gets the last frame's messages
+            time.sleep(1.0)  # the recorder gets the last frame's messages
         crashed = crashed or graph.died(exclude=(player, monitor))
         if monitor and graph.procs[monitor].poll() not in (None, 0):
-            crashed.append(monitor)   # it exits 1 when it could score nothing
+            crashed.append(monitor)  # it exits 1 when it could score nothing
     finally:
         graph.stop(stop_timeout)
         for sig, handler in previous.items():
@@ -134,8 +135,10 @@ def run(settings: GraphSettings, log_dir: Path, stop_timeout: float = 10.0, echo
     if crashed:
         for label in crashed:
             spec = next(s for s in specs if s.label == label)
-            echo(f'run_graph: {label} exited early (code {graph.procs[label].returncode}); '
-                 f'last lines of {graph.log_path(spec)}:')
+            echo(
+                f'run_graph: {label} exited early (code {graph.procs[label].returncode}); '
+                f'last lines of {graph.log_path(spec)}:'
+            )
             echo(''.join(graph.log_path(spec).read_text().splitlines(keepends=True)[-15:]))
         return 4
     code = graph.procs[player].returncode
@@ -147,8 +150,12 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_settings_arguments(parser, GraphSettings)
     parser.add_argument('--log_dir', default='out/graph/logs', help='one log file per node (default: out/graph/logs)')
-    parser.add_argument('--stop_timeout', type=float, default=10.0,
-                        help='seconds between SIGTERM and SIGKILL when stopping the nodes (default: 10)')
+    parser.add_argument(
+        '--stop_timeout',
+        type=float,
+        default=10.0,
+        help='seconds between SIGTERM and SIGKILL when stopping the nodes (default: 10)',
+    )
     args = parser.parse_args(argv)
     try:
         settings = settings_from_namespace(GraphSettings, args)

@@ -32,8 +32,13 @@ from matrix_core.register.registrar import Registrar
 from matrix_core.register.scene import settings_for_dataset
 from matrix_core.register.settings import MATRIX_BLOCK
 from matrix_register.settings import RegisterNodeSettings
-from matrix_ros.conversions import (camera_info_to_camera, image_to_compressed, registration_from_msg,
-                                    seconds_to_stamp, stamp_to_seconds)
+from matrix_ros.conversions import (
+    camera_info_to_camera,
+    image_to_compressed,
+    registration_from_msg,
+    seconds_to_stamp,
+    stamp_to_seconds,
+)
 from matrix_ros.qos import qos_by_name
 from ros_helpers import spin_until, start_node, stop, wait_matched
 
@@ -44,8 +49,9 @@ VIEW, FRAMES = 'D3', 5
 def _separate_nodes(dataset, config, jpegs):
     """What separate register and calib nodes compute for these JPEGs (the same core, colour decode)."""
     register, _ = settings_for_dataset(RegisterNodeSettings(views=[VIEW]), dataset)
-    registrar = Registrar(register, dataset.reference_image(VIEW), dataset.reference_camera(VIEW), dataset.area,
-                          f'{VIEW}/reference')
+    registrar = Registrar(
+        register, dataset.reference_image(VIEW), dataset.reference_camera(VIEW), dataset.area, f'{VIEW}/reference'
+    )
     calib = CalibNodeSettings(config=str(config), prior_dataset=str(dataset.root), use_registration=True)
     scene = load_scene(calib.config)
     calibrator = DroneCalibrator(scene, calib, *initial_prior(scene, VIEW, dataset))
@@ -66,20 +72,38 @@ def _thread_niceness(pid: int) -> dict:
 def test_drone_process_decodes_once_and_hands_the_registration_to_calib(matrix_sample, node_executable):
     dataset = MatrixDataset(matrix_sample)
     config = config_for_dataset(matrix_sample)
-    drone = start_node(node_executable('matrix_bringup', 'drone'), f'views:=[{VIEW}]', 'compressed:=true',
-                       f'reference_dataset:={matrix_sample}', f'prior_dataset:={matrix_sample}', f'config:={config}',
-                       'qos:=reliable', 'use_registration:=true', 'registration_wait_s:=60.0')
+    drone = start_node(
+        node_executable('matrix_bringup', 'drone'),
+        f'views:=[{VIEW}]',
+        'compressed:=true',
+        f'reference_dataset:={matrix_sample}',
+        f'prior_dataset:={matrix_sample}',
+        f'config:={config}',
+        'qos:=reliable',
+        'use_registration:=true',
+        'registration_wait_s:=60.0',
+    )
     rclpy.init()
     node = Node('drone_process_test')
     homographies, infos, diags = {}, {}, {}
     images = node.create_publisher(CompressedImage, f'/{VIEW}/image/compressed', qos_by_name('reliable'))
     outputs = [
-        node.create_subscription(HomographyStamped, f'/{VIEW}/homography',
-                                 lambda m: homographies.setdefault(stamp_to_seconds(m.header.stamp), m), 10),
-        node.create_subscription(CameraInfo, f'/{VIEW}/camera_info',
-                                 lambda m: infos.setdefault(stamp_to_seconds(m.header.stamp), m), 10),
-        node.create_subscription(DiagnosticArray, '/diagnostics', lambda m: diags.update(
-            {(s.name, round(stamp_to_seconds(m.header.stamp), 3)): s for s in m.status}), 50)]
+        node.create_subscription(
+            HomographyStamped,
+            f'/{VIEW}/homography',
+            lambda m: homographies.setdefault(stamp_to_seconds(m.header.stamp), m),
+            10,
+        ),
+        node.create_subscription(
+            CameraInfo, f'/{VIEW}/camera_info', lambda m: infos.setdefault(stamp_to_seconds(m.header.stamp), m), 10
+        ),
+        node.create_subscription(
+            DiagnosticArray,
+            '/diagnostics',
+            lambda m: diags.update({(s.name, round(stamp_to_seconds(m.header.stamp), 3)): s for s in m.status}),
+            50,
+        ),
+    ]
     jpegs = []
     try:
         wait_matched(node, [images, *outputs], [drone], 120)
@@ -88,8 +112,10 @@ def test_drone_process_decodes_once_and_hands_the_registration_to_calib(matrix_s
         readers, homography_readers = images.get_subscription_count(), node.count_subscribers(f'/{VIEW}/homography')
         for k in range(FRAMES):
             stamp = 1.0 + 0.5 * k
-            msg = image_to_compressed(dataset.load_image(VIEW, dataset.frames[k]),
-                                      Header(stamp=seconds_to_stamp(stamp), frame_id=f'{VIEW}/camera_optical'))
+            msg = image_to_compressed(
+                dataset.load_image(VIEW, dataset.frames[k]),
+                Header(stamp=seconds_to_stamp(stamp), frame_id=f'{VIEW}/camera_optical'),
+            )
             jpegs.append((stamp, msg))
             images.publish(msg)
             assert spin_until(node, lambda: ('calib/D3', stamp) in diags and stamp in homographies, [drone], 60), stamp
@@ -102,12 +128,12 @@ def test_drone_process_decodes_once_and_hands_the_registration_to_calib(matrix_s
         node.destroy_node()
         rclpy.shutdown()
     assert named, node.get_node_names()
-    assert readers == 1, out   # one image subscription in the process (register's)
-    assert homography_readers == 1, out   # this test's: calib takes the registration in process
+    assert readers == 1, out  # one image subscription in the process (register's)
+    assert homography_readers == 1, out  # this test's: calib takes the registration in process
     assert alive, out
     # calib on a thread of its own (thread_niceness, default 5): niced 5 more than the process's main thread
     assert niceness[drone.pid] + CalibNodeSettings().thread_niceness in niceness.values(), niceness
-    for name in ('register/D3', 'calib/D3'):   # a corrupt JPEG: each node says so, the process goes on
+    for name in ('register/D3', 'calib/D3'):  # a corrupt JPEG: each node says so, the process goes on
         assert diags[(name, 9.0)].level == DiagnosticStatus.ERROR and 'bad input' in diags[(name, 9.0)].message, out
     separate = _separate_nodes(dataset, config, jpegs)
     for k, ((stamp, _), (registration, camera)) in enumerate(zip(jpegs, separate)):
@@ -121,7 +147,7 @@ def test_drone_process_decodes_once_and_hands_the_registration_to_calib(matrix_s
         pixels = truth.ground_to_img(world)
         ground = apply_homography(live.ground_H_img, pixels)
         assert np.median(np.linalg.norm(ground - apply_homography(registration.ground_H_img, pixels), axis=1)) < 0.05
-        assert np.median(np.linalg.norm(ground - world, axis=1)) < 0.1   # metres
+        assert np.median(np.linalg.norm(ground - world, axis=1)) < 0.1  # metres
         cam = camera_info_to_camera(infos[stamp])
         # grey and colour decodes of one JPEG differ by a grey level here and there: poses by up to ~0.1 deg on
         # D3 (measured), each as close to the truth as the other
@@ -131,8 +157,12 @@ def test_drone_process_decodes_once_and_hands_the_registration_to_calib(matrix_s
 
 def test_drone_process_names_a_parameter_neither_node_has(matrix_sample, node_executable):
     """One parameter set for two nodes: each takes the other's names, a name neither has is an error."""
-    drone = start_node(node_executable('matrix_bringup', 'drone'), f'views:=[{VIEW}]',
-                       f'reference_dataset:={matrix_sample}', 'registration_wiat_s:=1.0')
+    drone = start_node(
+        node_executable('matrix_bringup', 'drone'),
+        f'views:=[{VIEW}]',
+        f'reference_dataset:={matrix_sample}',
+        'registration_wiat_s:=1.0',
+    )
     try:
         drone.wait(120)
     finally:

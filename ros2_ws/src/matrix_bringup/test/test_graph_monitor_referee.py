@@ -22,28 +22,37 @@ STAMP = 1.0
 
 def _status(publisher, stage: str, view: str) -> None:
     """One node's per-image status, as register and calib publish it."""
-    publisher.publish(DiagnosticArray(header=Header(stamp=seconds_to_stamp(STAMP)),
-                                      status=[DiagnosticStatus(name=f'{stage}/{view}', message='ok')]))
+    publisher.publish(
+        DiagnosticArray(
+            header=Header(stamp=seconds_to_stamp(STAMP)),
+            status=[DiagnosticStatus(name=f'{stage}/{view}', message='ok')],
+        )
+    )
 
 
 def test_a_frame_is_done_only_when_every_part_arrived_and_a_late_one_is_named(node_executable, tmp_path):
-    monitor = start_node(node_executable('matrix_bringup', 'graph_monitor'), 'views:=[D1,D2]',
-                         'wait_for:=[register,calib,tracks]', 'waiting_warning:=1.0', 'idle_timeout:=120.0',
-                         f'out_dir:={tmp_path}')
+    monitor = start_node(
+        node_executable('matrix_bringup', 'graph_monitor'),
+        'views:=[D1,D2]',
+        'wait_for:=[register,calib,tracks]',
+        'waiting_warning:=1.0',
+        'idle_timeout:=120.0',
+        f'out_dir:={tmp_path}',
+    )
     rclpy.init()
     node = Node('referee_test')
     done = []
     diagnostics = node.create_publisher(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, publisher_qos())
     tracks = node.create_publisher(TrackArray, topics.TRACKS, publisher_qos())
-    frame_done = node.create_subscription(Header, FRAME_DONE_TOPIC,
-                                          lambda m: done.append(stamp_to_seconds(m.stamp)),
-                                          qos_by_name('history'))
+    frame_done = node.create_subscription(
+        Header, FRAME_DONE_TOPIC, lambda m: done.append(stamp_to_seconds(m.stamp)), qos_by_name('history')
+    )
     try:
         wait_matched(node, [diagnostics, tracks, frame_done], [monitor], 60)
         for stage, view in [('register', 'D1'), ('register', 'D2'), ('calib', 'D1')]:
             _status(diagnostics, stage, view)
         tracks.publish(TrackArray(header=Header(stamp=seconds_to_stamp(STAMP), frame_id='world')))
-        spin_for(node, 3.0)   # the time is the point: calib/D2 is missing, so nothing may be announced
+        spin_for(node, 3.0)  # the time is the point: calib/D2 is missing, so nothing may be announced
         early = list(done)
         _status(diagnostics, 'calib', 'D2')
         announced = spin_until(node, lambda: STAMP in done, [monitor], 30)
@@ -60,8 +69,9 @@ def test_a_frame_is_done_only_when_every_part_arrived_and_a_late_one_is_named(no
 
 def test_a_monitor_stopped_by_sigterm_writes_its_summary_without_a_traceback(node_executable, tmp_path):
     # a benchmark or a launch stops the monitor while it still waits: it says what it saw, no traceback
-    monitor = start_node(node_executable('matrix_bringup', 'graph_monitor'), 'views:=[D1]', 'expected_frames:=5',
-                         f'out_dir:={tmp_path}')
+    monitor = start_node(
+        node_executable('matrix_bringup', 'graph_monitor'), 'views:=[D1]', 'expected_frames:=5', f'out_dir:={tmp_path}'
+    )
     rclpy.init()
     node = Node('referee_stop_test')
     try:
@@ -70,5 +80,5 @@ def test_a_monitor_stopped_by_sigterm_writes_its_summary_without_a_traceback(nod
         node.destroy_node()
         rclpy.shutdown()
     out = stop(monitor)
-    assert monitor.returncode == 1, out   # it could score nothing: no frame came
+    assert monitor.returncode == 1, out  # it could score nothing: no frame came
     assert 'Traceback' not in out and (tmp_path / 'graph_summary.txt').is_file(), out

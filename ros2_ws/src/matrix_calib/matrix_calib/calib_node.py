@@ -28,8 +28,14 @@ from matrix_core.geometry.camera import check_intrinsics
 from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
 from matrix_ros import diagnostics
 from matrix_ros.connect import SubscribeWhenConnected
-from matrix_ros.conversions import (ConversionError, camera_to_camera_info, camera_to_pose, msg_to_image,
-                                    registration_from_msg, stamp_to_seconds)
+from matrix_ros.conversions import (
+    ConversionError,
+    camera_to_camera_info,
+    camera_to_pose,
+    msg_to_image,
+    registration_from_msg,
+    stamp_to_seconds,
+)
 from matrix_ros.drone_link import DroneLink
 from matrix_ros.node_settings import hosted_drones
 from matrix_ros.params import declare_settings, spin_node
@@ -43,7 +49,7 @@ class CalibNode(Node):
         self.link = link.connect(self._on_image, self._on_registration) if link else DroneLink()
         self.settings = s = declare_settings(self, CalibNodeSettings, defaults, shared=self.link.parameters)
         s.apply_threads()
-        self.own_thread = self.link.own_thread(self, s.thread_niceness)   # then spin_nodes spins it on its own thread
+        self.own_thread = self.link.own_thread(self, s.thread_niceness)  # then spin_nodes spins it on its own thread
         self.scene = load_scene(s.config)
         reference = MatrixDataset(s.prior_dataset) if s.prior_dataset else None
         self.calibrators, self.pubs, self.syncs, self.connections = {}, {}, {}, {}
@@ -52,34 +58,51 @@ class CalibNode(Node):
             self.calibrators[view] = DroneCalibrator(self.scene, s, *self._prior(view, reference))
             self.pubs[view] = (
                 self.create_publisher(CameraInfo, topics.drone_topic(prefix, topics.CAMERA_INFO), publisher_qos()),
-                self.create_publisher(PoseStamped, topics.drone_topic(prefix, topics.POSE), publisher_qos()))
+                self.create_publisher(PoseStamped, topics.drone_topic(prefix, topics.POSE), publisher_qos()),
+            )
             if s.intrinsics_topic:
-                self.create_subscription(CameraInfo, topics.drone_topic(prefix, s.intrinsics_topic),
-                                         lambda m, v=view: self._on_intrinsics(v, m), 10)
+                self.create_subscription(
+                    CameraInfo,
+                    topics.drone_topic(prefix, s.intrinsics_topic),
+                    lambda m, v=view: self._on_intrinsics(v, m),
+                    10,
+                )
             self._subscribe(view, prefix)
-        if s.use_registration:   # waits on the wall clock (sim time stops in lockstep), checked to 5 % of their length
-            period = min(1.0, max(0.05, s.registration_wait_s / 20))   # (20 Hz cost an idle node 3.6 % of a core)
+        if s.use_registration:  # waits on the wall clock (sim time stops in lockstep), checked to 5 % of their length
+            period = min(1.0, max(0.05, s.registration_wait_s / 20))  # (20 Hz cost an idle node 3.6 % of a core)
             self.create_timer(period, self._poll, clock=Clock(clock_type=ClockType.STEADY_TIME))
-        self.get_logger().info(f'calibrating {sorted(self.calibrators)} with {len(self.scene.boards)} boards'
-                               + (', guided by their registrations' if s.use_registration else ''))
+        self.get_logger().info(
+            f'calibrating {sorted(self.calibrators)} with {len(self.scene.boards)} boards'
+            + (', guided by their registrations' if s.use_registration else '')
+        )
 
     def _subscribe(self, view: str, prefix: str) -> None:
         """Its images, and registrations (``use_registration``; the images once those have a publisher)."""
         s = self.settings
         if s.use_registration:
-            self.syncs[view] = FrameSynchronizer(FrameSyncSettings(['image', 'registration'], s.registration_wait_s,
-                                                                   restart_gap=s.restart_gap_s))
+            self.syncs[view] = FrameSynchronizer(
+                FrameSyncSettings(['image', 'registration'], s.registration_wait_s, restart_gap=s.restart_gap_s)
+            )
         if self.link.shared:
             return
 
         def subscribe_images():
-            self.create_subscription(CompressedImage if s.compressed else Image, topics.drone_topic(
-                prefix, topics.image_stream(s.compressed)), lambda m: self._on_image(view, m), qos_by_name(s.qos))
+            self.create_subscription(
+                CompressedImage if s.compressed else Image,
+                topics.drone_topic(prefix, topics.image_stream(s.compressed)),
+                lambda m: self._on_image(view, m),
+                qos_by_name(s.qos),
+            )
+
         if not s.use_registration:
             subscribe_images()
             return
-        registrations = self.create_subscription(HomographyStamped, topics.drone_topic(prefix, topics.HOMOGRAPHY),
-                                                 lambda m: self._on_registration(view, m), 10)
+        registrations = self.create_subscription(
+            HomographyStamped,
+            topics.drone_topic(prefix, topics.HOMOGRAPHY),
+            lambda m: self._on_registration(view, m),
+            10,
+        )
         self.connections[view] = SubscribeWhenConnected(self, view, [registrations], subscribe_images)
 
     def _prior(self, view, reference) -> tuple:
@@ -94,24 +117,27 @@ class CalibNode(Node):
         try:
             K = check_intrinsics(msg.k, d, size, f'{view} CameraInfo')
             if self.calibrators[view].set_intrinsics(K, d, size):
-                self.get_logger().info(f'{view}: intrinsics from {self.settings.intrinsics_topic}: fx {K[0, 0]:.2f}, {size[0]}x{size[1]}')
+                self.get_logger().info(
+                    f'{view}: intrinsics from {self.settings.intrinsics_topic}: fx {K[0, 0]:.2f}, {size[0]}x{size[1]}'
+                )
         except ValueError as exc:
             self.get_logger().error(f'{view}: CameraInfo intrinsics ignored: {exc}')
 
     def _on_image(self, view: str, msg, image=None, received=None):
-        item = (msg, received or time.perf_counter(), image)   # image: decoded by register in this process, else None
+        item = (msg, received or time.perf_counter(), image)  # image: decoded by register in this process, else None
         if view not in self.syncs:
             return self._calibrate(view, *item)
         self._synced(view, self.syncs[view].add('image', stamp_to_seconds(msg.header.stamp), item, time.monotonic()))
 
     def _on_registration(self, view: str, msg: HomographyStamped):
         sync, stamp = self.syncs.get(view), stamp_to_seconds(msg.header.stamp)
-        if sync is None:   # not guided by registrations (use_registration false)
+        if sync is None:  # not guided by registrations (use_registration false)
             return
-        late, frames = sync.late_items, sync.add('registration', stamp, msg, time.monotonic())   # late: before adding
+        late, frames = sync.late_items, sync.add('registration', stamp, msg, time.monotonic())  # late: before adding
         if sync.late_items > late:
-            self.get_logger().warning(f'{view}: registration of t={stamp:.3f} s came after its image was '
-                                      'calibrated without it; ignored')
+            self.get_logger().warning(
+                f'{view}: registration of t={stamp:.3f} s came after its image was calibrated without it; ignored'
+            )
         self._synced(view, frames)
 
     def _poll(self):
@@ -126,9 +152,11 @@ class CalibNode(Node):
                 continue
             registration = registration_from_msg(frame.items['registration']) if 'registration' in frame.items else None
             if registration is None or not registration.ok:
-                why = (f'no registration of t={frame.stamp:.3f} s within {self.settings.registration_wait_s} s:'
-                       if registration is None else
-                       f't={frame.stamp:.3f} s: registration {registration.status}: {registration.message};')
+                why = (
+                    f'no registration of t={frame.stamp:.3f} s within {self.settings.registration_wait_s} s:'
+                    if registration is None
+                    else f't={frame.stamp:.3f} s: registration {registration.status}: {registration.message};'
+                )
                 self.get_logger().warning(f'{view}: {why} calibrated from the image motion')
             self._calibrate(view, *frame.items['image'], registration)
 
@@ -143,18 +171,28 @@ class CalibNode(Node):
             return
         if result.camera is not None and (result.status == OK or self.settings.publish_stale):
             info_pub, pose_pub = self.pubs[view]
-            info_pub.publish(camera_to_camera_info(result.camera, Header(
-                stamp=stamp, frame_id=msg.header.frame_id or topics.optical_frame(view))))
+            info_pub.publish(
+                camera_to_camera_info(
+                    result.camera, Header(stamp=stamp, frame_id=msg.header.frame_id or topics.optical_frame(view))
+                )
+            )
             pose_pub.publish(camera_to_pose(result.camera, Header(stamp=stamp, frame_id=self.settings.world_frame)))
         level = {OK: diagnostics.OK, FAILED: diagnostics.ERROR}.get(result.status, diagnostics.WARN)
-        self._diagnose(view, stamp, level, result.message, {**result.diagnostics(),
-                                                            'latency_s': f'{time.perf_counter() - received:.3f}'})
+        self._diagnose(
+            view,
+            stamp,
+            level,
+            result.message,
+            {**result.diagnostics(), 'latency_s': f'{time.perf_counter() - received:.3f}'},
+        )
         if result.status != OK:
             self.get_logger().warning(f'{view}: {result.status}: {result.message}')
 
     def _diagnose(self, view: str, stamp, level, message: str, values: dict) -> None:
         """One DiagnosticStatus ``calib/<view>`` per image (stamp = the image's), whatever the outcome."""
-        self.diag_pub.publish(diagnostics.array(stamp, diagnostics.status(f'calib/{view}', level, message, values, view)))
+        self.diag_pub.publish(
+            diagnostics.array(stamp, diagnostics.status(f'calib/{view}', level, message, values, view))
+        )
 
 
 def main(argv=None) -> int:

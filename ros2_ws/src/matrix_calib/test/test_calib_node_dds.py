@@ -20,7 +20,7 @@ pytestmark = [pytest.mark.ros, pytest.mark.slow]
 VIEWS = ('D1', 'D5')  # two drones hosted by one calib process
 FRAMES = 5  # frames published, each must come back (ok, or stale with its age)
 PUBLISHED = FRAMES
-STARTUP_S = 120   # a node process starts and matches in seconds, minutes on a loaded machine
+STARTUP_S = 120  # a node process starts and matches in seconds, minutes on a loaded machine
 
 
 def test_calib_node_matches_stored_calibration(matrix_sample, node_executable):
@@ -33,24 +33,41 @@ def test_calib_node_matches_stored_calibration(matrix_sample, node_executable):
     for v in VIEWS:
         outputs += [
             node.create_subscription(CameraInfo, f'/{v}/camera_info', lambda m, v=v: got[(v, 'info')].append(m), 10),
-            node.create_subscription(PoseStamped, f'/{v}/pose', lambda m, v=v: got[(v, 'pose')].append(m), 10)]
+            node.create_subscription(PoseStamped, f'/{v}/pose', lambda m, v=v: got[(v, 'pose')].append(m), 10),
+        ]
     node.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 50)
-    calib = start_node(node_executable('matrix_calib', 'calib'), f'views:=[{",".join(VIEWS)}]',
-                       f'prior_dataset:={matrix_sample}', 'qos:=reliable',
-                       # intrinsics (only K, D, size) from the player's stored CameraInfo, as a drone driver sends
-                       'intrinsics_topic:=ground_truth/camera_info')
+    calib = start_node(
+        node_executable('matrix_calib', 'calib'),
+        f'views:=[{",".join(VIEWS)}]',
+        f'prior_dataset:={matrix_sample}',
+        'qos:=reliable',
+        # intrinsics (only K, D, size) from the player's stored CameraInfo, as a drone driver sends
+        'intrinsics_topic:=ground_truth/camera_info',
+    )
     processes = [calib]
     try:
         # Start the images only once calib's outputs are matched to this listener: results published before
         # discovery finishes would be lost (volatile durability), and the tracker would start mid-sequence.
         wait_matched(node, outputs, [calib], STARTUP_S)
-        processes.insert(0, start_node(node_executable('matrix_ros', 'dataset_player'), f'dataset:={matrix_sample}',
-                                       f'views:=[{",".join(VIEWS)}]', f'max_frames:={PUBLISHED}', 'rate:=0.4',
-                                       'wait_for_subscribers:=1'))
-        spin_until(node, lambda: all(len(x) >= FRAMES for x in got.values()) and len(diags) >= len(VIEWS) * FRAMES,
-                   processes, 120)
+        processes.insert(
+            0,
+            start_node(
+                node_executable('matrix_ros', 'dataset_player'),
+                f'dataset:={matrix_sample}',
+                f'views:=[{",".join(VIEWS)}]',
+                f'max_frames:={PUBLISHED}',
+                'rate:=0.4',
+                'wait_for_subscribers:=1',
+            ),
+        )
+        spin_until(
+            node,
+            lambda: all(len(x) >= FRAMES for x in got.values()) and len(diags) >= len(VIEWS) * FRAMES,
+            processes,
+            120,
+        )
     finally:
-        out = '\n'.join(stop_all(processes))   # the player first
+        out = '\n'.join(stop_all(processes))  # the player first
         node.destroy_node()
         rclpy.shutdown()
     status_of = {(st.hardware_id, stamp_to_seconds(d.header.stamp)): st for d in diags for st in d.status}
@@ -91,14 +108,19 @@ def test_calib_node_survives_bad_input(matrix_sample, node_executable):
     diags = []
     # history: the calib's first status may go out before its writer matched this reader
     diag_sub = node.create_subscription(DiagnosticArray, '/diagnostics', diags.append, qos_by_name('history'))
-    calib = start_node(node_executable('matrix_calib', 'calib'), 'views:=[D5]', 'compressed:=true',
-                       f'prior_dataset:={matrix_sample}', 'qos:=reliable')
+    calib = start_node(
+        node_executable('matrix_calib', 'calib'),
+        'views:=[D5]',
+        'compressed:=true',
+        f'prior_dataset:={matrix_sample}',
+        'qos:=reliable',
+    )
     good = (matrix_sample / 'image_subsets/D5/0000.jpg').read_bytes()
     try:
         wait_matched(node, [pub, diag_sub], [calib], STARTUP_S)
         for k, data in enumerate((b'', b'\xff\xd8 not a jpeg', good), 1):
             pub.publish(CompressedImage(format='jpeg', data=data))
-            spin_until(node, lambda: len(diags) >= k, [calib], 60)   # one image at a time: in order
+            spin_until(node, lambda: len(diags) >= k, [calib], 60)  # one image at a time: in order
         alive = calib.poll() is None
     finally:
         out = stop(calib)

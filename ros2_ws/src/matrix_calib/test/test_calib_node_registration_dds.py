@@ -20,13 +20,18 @@ from ros_helpers import spin_for, spin_until, start_node, stop, wait_matched
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 # What each frame's registration is, and how calib's diagnostics must say the frame was guided.
-PLAN = [('truth', 'registration'), ('failed', 'homography ('), ('none', 'homography ('),
-        ('nan', 'registration homography unusable; homography ('), ('truth', 'registration')]
+PLAN = [
+    ('truth', 'registration'),
+    ('failed', 'homography ('),
+    ('none', 'homography ('),
+    ('nan', 'registration homography unusable; homography ('),
+    ('truth', 'registration'),
+]
 
 
 def _registration(header, dataset, frame, kind) -> HomographyStamped:
     msg = HomographyStamped(header=header, status='ok', confidence=0.9)
-    H = np.linalg.inv(dataset.camera('D5', frame).img_H_ground())   # image pixels -> ground metres
+    H = np.linalg.inv(dataset.camera('D5', frame).img_H_ground())  # image pixels -> ground metres
     msg.h_img_to_ground = (np.full(9, np.nan) if kind == 'nan' else (H / H[2, 2]).ravel()).tolist()
     if kind == 'failed':
         msg.status, msg.h_img_to_ground = 'failed: test', [0.0] * 9
@@ -39,16 +44,29 @@ def test_calib_follows_the_registration_and_copes_without_it(matrix_sample, node
     node = Node('calib_registration_test')
     images = node.create_publisher(CompressedImage, '/D5/image/compressed', qos_by_name('reliable'))
     diags = {}
-    diag_sub = node.create_subscription(DiagnosticArray, '/diagnostics', lambda m: diags.update(
-        {round(stamp_to_seconds(m.header.stamp), 3): s for s in m.status if s.name == 'calib/D5'}), 50)
-    calib = start_node(node_executable('matrix_calib', 'calib'), 'views:=[D5]', 'compressed:=true',
-                       f'prior_dataset:={matrix_sample}', 'qos:=reliable', 'use_registration:=true',
-                       'registration_wait_s:=1.0', 'restart_gap_s:=1.0')
+    diag_sub = node.create_subscription(
+        DiagnosticArray,
+        '/diagnostics',
+        lambda m: diags.update(
+            {round(stamp_to_seconds(m.header.stamp), 3): s for s in m.status if s.name == 'calib/D5'}
+        ),
+        50,
+    )
+    calib = start_node(
+        node_executable('matrix_calib', 'calib'),
+        'views:=[D5]',
+        'compressed:=true',
+        f'prior_dataset:={matrix_sample}',
+        'qos:=reliable',
+        'use_registration:=true',
+        'registration_wait_s:=1.0',
+        'restart_gap_s:=1.0',
+    )
     try:
         assert spin_until(node, lambda: node.count_subscribers('/D5/homography') == 1, [calib], 120)
         # What is tested: for 2 s without a registration publisher, calib subscribes no images.
         spin_for(node, 2.0)
-        unconnected = images.get_subscription_count()   # no registration publisher yet: no image subscription
+        unconnected = images.get_subscription_count()  # no registration publisher yet: no image subscription
         registrations = node.create_publisher(HomographyStamped, '/D5/homography', 10)
         # calib subscribes the images once its registration subscription matched this publisher; this
         # publisher's side of that match is waited for too, so that no registration is lost.
@@ -61,7 +79,7 @@ def test_calib_follows_the_registration_and_copes_without_it(matrix_sample, node
                 registrations.publish(_registration(header, dataset, frame, kind))
             assert spin_until(node, lambda: round(stamp, 3) in diags, [calib], 60), (stamp, kind)
         first = diags.pop(1.0)
-        header = Header(stamp=seconds_to_stamp(1.0), frame_id='D5/camera_optical')   # the replay starts over
+        header = Header(stamp=seconds_to_stamp(1.0), frame_id='D5/camera_optical')  # the replay starts over
         images.publish(image_to_compressed(dataset.load_image('D5', dataset.frames[0]), header))
         registrations.publish(_registration(header, dataset, dataset.frames[0], 'truth'))
         assert spin_until(node, lambda: 1.0 in diags, [calib], 60), 'the restarted replay was refused'

@@ -18,7 +18,7 @@ in one 45-frame run at 4 Mbit/s).
 
 from dataclasses import dataclass
 
-SENT, DROPPED = 'sent', 'dropped'   # LinkGate.offer's outcomes
+SENT, DROPPED = 'sent', 'dropped'  # LinkGate.offer's outcomes
 # Bytes on the link per byte of image: Ethernet, IP and UDP headers of each ~1.5 kB packet, RTPS headers of
 # each fragment (a 745 kB JPEG: about 540 packets, 24 kB of headers)
 WIRE_OVERHEAD = 1.035
@@ -29,7 +29,7 @@ class LinkCounts:
     """Frames offered so far, by outcome, and the bytes sent."""
 
     sent: int = 0
-    dropped: int = 0   # dropped at the sender: the link was still carrying the frames before
+    dropped: int = 0  # dropped at the sender: the link was still carrying the frames before
     sent_bytes: int = 0
 
 
@@ -46,7 +46,7 @@ class LinkGate:
             raise ValueError(f'link_mbit must be >= 0 (0: no budget), got {link_mbit}')
         self.link_mbit = link_mbit
         self.counts = LinkCounts()
-        self._free_at = float('-inf')   # monotonic seconds the link has carried every frame sent
+        self._free_at = float('-inf')  # monotonic seconds the link has carried every frame sent
 
     def transfer_s(self, n_bytes: int) -> float:
         """Seconds a frame of ``n_bytes`` occupies the link (0 without a budget)."""

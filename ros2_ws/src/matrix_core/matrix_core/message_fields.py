@@ -21,8 +21,14 @@ import numpy as np
 
 from matrix_core.geometry.camera import Camera, pose_matrix
 from matrix_core.geometry.quaternion import matrix_from_quaternion, quaternion_from_matrix
-from matrix_core.register.registration import (STATUS_FAILED, STATUS_OK, STATUS_UNUSABLE, Registration,
-                                               RegistrationError, check_homography)
+from matrix_core.register.registration import (
+    STATUS_FAILED,
+    STATUS_OK,
+    STATUS_UNUSABLE,
+    Registration,
+    RegistrationError,
+    check_homography,
+)
 
 
 class ConversionError(ValueError):
@@ -48,10 +54,18 @@ def stamp_ns(msg_header) -> int:
 
 # --- images -------------------------------------------------------------------------------------------
 _CHANNELS = {'bgr8': 3, 'rgb8': 3, 'mono8': 1, 'bgra8': 4, 'rgba8': 4}
-_TO_BGR = {'rgb8': cv2.COLOR_RGB2BGR, 'mono8': cv2.COLOR_GRAY2BGR, 'bgra8': cv2.COLOR_BGRA2BGR,
-           'rgba8': cv2.COLOR_RGBA2BGR}
-_REDUCED = {1: cv2.IMREAD_COLOR, 2: cv2.IMREAD_REDUCED_COLOR_2, 4: cv2.IMREAD_REDUCED_COLOR_4,
-            8: cv2.IMREAD_REDUCED_COLOR_8}
+_TO_BGR = {
+    'rgb8': cv2.COLOR_RGB2BGR,
+    'mono8': cv2.COLOR_GRAY2BGR,
+    'bgra8': cv2.COLOR_BGRA2BGR,
+    'rgba8': cv2.COLOR_RGBA2BGR,
+}
+_REDUCED = {
+    1: cv2.IMREAD_COLOR,
+    2: cv2.IMREAD_REDUCED_COLOR_2,
+    4: cv2.IMREAD_REDUCED_COLOR_4,
+    8: cv2.IMREAD_REDUCED_COLOR_8,
+}
 
 
 def _bytes(data) -> np.ndarray:
@@ -67,8 +81,14 @@ def image_fields(image: np.ndarray) -> dict:
         raise ConversionError(f'expected uint8 (H, W) or (H, W, 3) image, got {image.dtype} {image.shape}')
     h, w = image.shape[:2]
     channels = 3 if image.ndim == 3 else 1
-    return {'height': h, 'width': w, 'encoding': 'bgr8' if channels == 3 else 'mono8', 'is_bigendian': 0,
-            'step': w * channels, 'data': np.ascontiguousarray(image).tobytes()}
+    return {
+        'height': h,
+        'width': w,
+        'encoding': 'bgr8' if channels == 3 else 'mono8',
+        'is_bigendian': 0,
+        'step': w * channels,
+        'data': np.ascontiguousarray(image).tobytes(),
+    }
 
 
 def is_jpeg(msg) -> bool:
@@ -107,9 +127,10 @@ def image_from_msg(msg, reduction: int = 1) -> np.ndarray:
         raise ConversionError('empty image (0 x 0)')
     data, row = _bytes(msg.data), msg.width * channels
     if msg.step < row or len(data) < msg.step * msg.height:
-        raise ConversionError(f'image data too short: {len(data)} bytes for {msg.width}x{msg.height} '
-                              f'{msg.encoding} with step {msg.step}')
-    img = data[:msg.step * msg.height].reshape(msg.height, msg.step)[:, :row].reshape(msg.height, msg.width, channels)
+        raise ConversionError(
+            f'image data too short: {len(data)} bytes for {msg.width}x{msg.height} {msg.encoding} with step {msg.step}'
+        )
+    img = data[: msg.step * msg.height].reshape(msg.height, msg.step)[:, :row].reshape(msg.height, msg.width, channels)
     if msg.encoding == 'bgr8':
         return img.copy()
     return cv2.cvtColor(img if channels > 1 else img[:, :, 0], _TO_BGR[msg.encoding])
@@ -130,16 +151,27 @@ def gray_image_from_msg(msg) -> np.ndarray:
 # --- cameras ------------------------------------------------------------------------------------------
 def camera_info_fields(camera: Camera) -> dict:
     """:class:`Camera` -> sensor_msgs/CameraInfo fields with ``p = K [R | t]`` (world -> pixels)."""
-    return {'width': int(camera.width), 'height': int(camera.height), 'distortion_model': 'plumb_bob',
-            'd': [float(v) for v in camera.dist], 'k': [float(v) for v in camera.K.reshape(-1)],
-            'r': [float(v) for v in np.eye(3).reshape(-1)], 'p': [float(v) for v in camera.P.reshape(-1)]}
+    return {
+        'width': int(camera.width),
+        'height': int(camera.height),
+        'distortion_model': 'plumb_bob',
+        'd': [float(v) for v in camera.dist],
+        'k': [float(v) for v in camera.K.reshape(-1)],
+        'r': [float(v) for v in np.eye(3).reshape(-1)],
+        'p': [float(v) for v in camera.P.reshape(-1)],
+    }
 
 
 def camera_from_camera_info(msg) -> Camera:
     """CameraInfo with ``p = K [R | t]`` -> :class:`Camera`; :class:`ConversionError` when it is not valid."""
     try:
-        return Camera.from_projection(np.asarray(msg.k, dtype=np.float64), np.asarray(msg.p, dtype=np.float64),
-                                      int(msg.width), int(msg.height), list(msg.d))
+        return Camera.from_projection(
+            np.asarray(msg.k, dtype=np.float64),
+            np.asarray(msg.p, dtype=np.float64),
+            int(msg.width),
+            int(msg.height),
+            list(msg.d),
+        )
     except ValueError as exc:
         raise ConversionError(f'invalid CameraInfo: {exc}') from exc
 
@@ -165,20 +197,31 @@ def registration_fields(registration: Registration) -> dict:
     """:class:`Registration` -> matrix_msgs/HomographyStamped fields (no header)."""
     r = registration
     error = float(r.inlier_error_px) if r.inlier_error_px is not None and np.isfinite(r.inlier_error_px) else 0.0
-    return {'h_cur_to_ref': _flat(r.ref_H_img if r.ok else None),
-            'h_img_to_ground': _flat(r.ground_H_img if r.ok else None),
-            'confidence': float(r.confidence), 'matches': int(r.matches), 'inliers': int(r.inliers),
-            'inlier_error_px': error, 'status': STATUS_OK if r.ok else f'{STATUS_FAILED}: {r.message}',
-            'reference_id': r.reference_id, 'backend': r.backend}
+    return {
+        'h_cur_to_ref': _flat(r.ref_H_img if r.ok else None),
+        'h_img_to_ground': _flat(r.ground_H_img if r.ok else None),
+        'confidence': float(r.confidence),
+        'matches': int(r.matches),
+        'inliers': int(r.inliers),
+        'inlier_error_px': error,
+        'status': STATUS_OK if r.ok else f'{STATUS_FAILED}: {r.message}',
+        'reference_id': r.reference_id,
+        'backend': r.backend,
+    }
 
 
 def registration_from_msg(msg) -> Registration:
     """matrix_msgs/HomographyStamped -> :class:`Registration`. A message that says ``ok`` but whose
     ``h_img_to_ground`` breaks the validity rule comes back with status ``unusable`` saying why: consumers
     never see NaN or zero matrices."""
-    values = {'confidence': float(msg.confidence), 'matches': int(msg.matches), 'inliers': int(msg.inliers),
-              'inlier_error_px': float(msg.inlier_error_px), 'reference_id': msg.reference_id,
-              'backend': msg.backend}
+    values = {
+        'confidence': float(msg.confidence),
+        'matches': int(msg.matches),
+        'inliers': int(msg.inliers),
+        'inlier_error_px': float(msg.inlier_error_px),
+        'reference_id': msg.reference_id,
+        'backend': msg.backend,
+    }
     if msg.status != STATUS_OK:
         reason = msg.status.split(': ', 1)[1] if msg.status.startswith(f'{STATUS_FAILED}: ') else msg.status
         return Registration.failed(reason, **values)
@@ -186,7 +229,7 @@ def registration_from_msg(msg) -> Registration:
         ground = check_homography(msg.h_img_to_ground, 'h_img_to_ground')
     except RegistrationError as exc:
         return Registration(STATUS_UNUSABLE, message=str(exc), **values)
-    try:   # only the ground homography is the contract; a producer may leave the pixel one out (zeros)
+    try:  # only the ground homography is the contract; a producer may leave the pixel one out (zeros)
         ref = check_homography(msg.h_cur_to_ref, 'h_cur_to_ref')
     except RegistrationError:
         ref = None

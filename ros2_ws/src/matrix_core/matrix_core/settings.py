@@ -63,8 +63,13 @@ def add_settings_arguments(parser: argparse.ArgumentParser, cls) -> None:
             raise TypeError(f'{cls.__name__}.{name}: unsupported setting type {typ}')
         if typ is bool and not extra:  # `--flag` alone means true; `--flag false` also works
             extra = {'nargs': '?', 'const': True}
-        group.add_argument(f'--{name}', type=parse_bool if typ is bool else typ, default=default,
-                           help=f'{help_text} (default: {default!r})', **extra)
+        group.add_argument(
+            f'--{name}',
+            type=parse_bool if typ is bool else typ,
+            default=default,
+            help=f'{help_text} (default: {default!r})',
+            **extra,
+        )
 
 
 def settings_from_namespace(cls, namespace: argparse.Namespace):

@@ -16,13 +16,13 @@ DIAGNOSTICS_TOPIC = '/diagnostics'
 IMAGE_RAW = 'image_raw'
 IMAGE_COMPRESSED = 'image/compressed'
 LINK_IMAGE_COMPRESSED = 'link/image/compressed'  # the images a drone sends across its link (link_sender)
-LINK_DROPPED = 'link/dropped'                    # the stamps of the frames link_sender did not send (Header)
-CAMERA_INFO = 'camera_info'                      # calib's per-frame calibration
-POSE = 'pose'                                    # calib's camera pose
-HOMOGRAPHY = 'homography'                        # register's registration
+LINK_DROPPED = 'link/dropped'  # the stamps of the frames link_sender did not send (Header)
+CAMERA_INFO = 'camera_info'  # calib's per-frame calibration
+POSE = 'pose'  # calib's camera pose
+HOMOGRAPHY = 'homography'  # register's registration
 GROUND_TRUTH_CAMERA_INFO = 'ground_truth/camera_info'
-DETECTIONS_2D = 'detections_2d'                  # fuse's boxes of the tracks in the drone's image
-OVERLAY_COMPRESSED = 'overlay/compressed'        # fuse's overlay: the image with those boxes and ids (JPEG)
+DETECTIONS_2D = 'detections_2d'  # fuse's boxes of the tracks in the drone's image
+OVERLAY_COMPRESSED = 'overlay/compressed'  # fuse's overlay: the image with those boxes and ids (JPEG)
 GROUND_TRUTH_POSE = 'ground_truth/pose'
 
 # Graph-wide streams.

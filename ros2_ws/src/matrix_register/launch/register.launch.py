@@ -11,5 +11,6 @@ from matrix_ros.launch_settings import settings_launch_description
 
 
 def generate_launch_description():
-    return settings_launch_description('matrix_register', 'register', RegisterNodeSettings,
-                                       defaults={'views': list(MATRIX_VIEWS)})
+    return settings_launch_description(
+        'matrix_register', 'register', RegisterNodeSettings, defaults={'views': list(MATRIX_VIEWS)}
+    )

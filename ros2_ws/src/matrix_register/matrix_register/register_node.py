@@ -42,7 +42,7 @@ from matrix_ros.restarts import DroneRestarts
 class RegisterNode(Node):
     def __init__(self, defaults: RegisterNodeSettings, link: DroneLink = None):
         super().__init__('register')
-        self.link = link or DroneLink()   # calib of the same process, if any (matrix_bringup.drone)
+        self.link = link or DroneLink()  # calib of the same process, if any (matrix_bringup.drone)
         self.settings = s = declare_settings(self, RegisterNodeSettings, defaults, shared=self.link.parameters)
         s.apply_threads()
         self.backend = make_backend(s)
@@ -59,11 +59,14 @@ class RegisterNode(Node):
         for view, prefix in hosted_drones(self, s.views):
             self._start_drone(view)
             self._subscribe_view(view, prefix, needs_camera_info=dataset is None)
-            self.pubs[view] = self.create_publisher(HomographyStamped, topics.drone_topic(prefix, topics.HOMOGRAPHY),
-                                                    publisher_qos())
+            self.pubs[view] = self.create_publisher(
+                HomographyStamped, topics.drone_topic(prefix, topics.HOMOGRAPHY), publisher_qos()
+            )
         self.diag_pub = self.create_publisher(diagnostics.DiagnosticArray, topics.DIAGNOSTICS_TOPIC, publisher_qos())
-        self.get_logger().info(f'registering {s.views} with backend {self.backend.name} at scale {s.scale}; '
-                               f'reference: {s.reference_dataset or "first frame with CameraInfo"}')
+        self.get_logger().info(
+            f'registering {s.views} with backend {self.backend.name} at scale {s.scale}; '
+            f'reference: {s.reference_dataset or "first frame with CameraInfo"}'
+        )
 
     def _subscribe_view(self, view: str, prefix: str, needs_camera_info: bool) -> None:
         """The view's images; without a reference dataset they wait for its CameraInfo stream to connect."""
@@ -71,21 +74,31 @@ class RegisterNode(Node):
 
         def subscribe_images():
             msg_type, stream = (CompressedImage, topics.IMAGE_COMPRESSED) if s.compressed else (Image, s.image_topic)
-            self.create_subscription(msg_type, topics.drone_topic(prefix, stream),
-                                     self.restarts.checked(view, lambda m: self._on_image(view, m)), qos_by_name(s.qos))
+            self.create_subscription(
+                msg_type,
+                topics.drone_topic(prefix, stream),
+                self.restarts.checked(view, lambda m: self._on_image(view, m)),
+                qos_by_name(s.qos),
+            )
+
         if not needs_camera_info:
             subscribe_images()
             return
-        info = self.create_subscription(CameraInfo, topics.drone_topic(prefix, s.camera_info_topic),
-                                        self.restarts.checked(view, lambda m: self._run(
-                                            view, self.pairing[view].camera_info(header_stamp_ns(m.header), m))), 10)
+        info = self.create_subscription(
+            CameraInfo,
+            topics.drone_topic(prefix, s.camera_info_topic),
+            self.restarts.checked(
+                view, lambda m: self._run(view, self.pairing[view].camera_info(header_stamp_ns(m.header), m))
+            ),
+            10,
+        )
         self.connections[view] = SubscribeWhenConnected(self, view, [info], subscribe_images)
 
     def _start_drone(self, view: str) -> None:
         """The drone's reference (dataset's, or first frame with a CameraInfo); again when a replay restarts."""
         self.pairing[view], d = ReferencePairing(), self.dataset
         self.registrars.pop(view, None)
-        if d is not None:   # the process's first registration pays for first calls: at start-up, not on a frame
+        if d is not None:  # the process's first registration pays for first calls: at start-up, not on a frame
             image, camera, name = d.reference_image(view), d.reference_camera(view), f'{view}/reference'
             warm_up_once(self.settings, image, camera, self.area, self.backend)
             self.registrars[view] = Registrar(self.settings, image, camera, self.area, name, self.backend)
@@ -94,7 +107,7 @@ class RegisterNode(Node):
         try:
             image = self.link.decode(msg)
         except (ConversionError, ValueError) as exc:
-            self.link.image(view, msg, None)   # calib tries itself and reports the bad input
+            self.link.image(view, msg, None)  # calib tries itself and reports the bad input
             return self._publish(view, msg.header, Registration.failed(f'bad input: {exc}', backend=self.backend.name))
         self.link.image(view, msg, image)
         if view in self.registrars:
@@ -107,8 +120,11 @@ class RegisterNode(Node):
         for step in steps or []:
             msg, image = step.image
             if step.kind == HOLD:
-                self.get_logger().warning(f'{view}: no reference yet (waiting for a {view}/{self.settings.camera_info_topic}'
-                                          ' with the stamp of an image)', throttle_duration_sec=5.0)
+                self.get_logger().warning(
+                    f'{view}: no reference yet (waiting for a {view}/{self.settings.camera_info_topic}'
+                    ' with the stamp of an image)',
+                    throttle_duration_sec=5.0,
+                )
             elif step.kind == FAIL:
                 self._publish(view, msg.header, Registration.failed(step.reason, backend=self.backend.name))
             elif step.kind == REFERENCE:
@@ -120,11 +136,20 @@ class RegisterNode(Node):
         msg, image = step.image
         text = stamp_text(step.stamp_ns)
         try:
-            self.registrars[view] = Registrar(self.settings, image, camera_info_to_camera(step.camera_info), self.area,
-                                              f'{view}/frame/{text}', self.backend)
+            self.registrars[view] = Registrar(
+                self.settings,
+                image,
+                camera_info_to_camera(step.camera_info),
+                self.area,
+                f'{view}/frame/{text}',
+                self.backend,
+            )
         except (ConversionError, ValueError) as exc:
-            self._publish(view, msg.header, Registration.failed(f'bad input: cannot make it the reference: {exc}',
-                                                                backend=self.backend.name))
+            self._publish(
+                view,
+                msg.header,
+                Registration.failed(f'bad input: cannot make it the reference: {exc}', backend=self.backend.name),
+            )
             return
         self.get_logger().info(f'{view}: reference is the image at {text} (its CameraInfo)')
         self._publish(view, msg.header, self.registrars[view].reference_result(), measured=True)
@@ -148,13 +173,31 @@ class RegisterNode(Node):
             log(f'{view}: image at {stamp_text(header_stamp_ns(header))} not registered: {result.message}')
         level = diagnostics.OK if result.ok else (diagnostics.ERROR if bad_input else diagnostics.WARN)
         text = 'ok' if result.ok else f'failed: {result.message}'
-        values = () if not measured else (
-            ('confidence', f'{result.confidence:.3f}'), ('matches', result.matches), ('inliers', result.inliers),
-            ('reference_id', result.reference_id), ('backend', result.backend), ('seconds', f'{result.seconds:.3f}'),
-            ('message', result.message))
-        self.diag_pub.publish(diagnostics.array(header, diagnostics.status(
-            f'register/{view}', level, text + (f' ({result.message})' if result.ok and result.message else ''),
-            values, view)))
+        values = (
+            ()
+            if not measured
+            else (
+                ('confidence', f'{result.confidence:.3f}'),
+                ('matches', result.matches),
+                ('inliers', result.inliers),
+                ('reference_id', result.reference_id),
+                ('backend', result.backend),
+                ('seconds', f'{result.seconds:.3f}'),
+                ('message', result.message),
+            )
+        )
+        self.diag_pub.publish(
+            diagnostics.array(
+                header,
+                diagnostics.status(
+                    f'register/{view}',
+                    level,
+                    text + (f' ({result.message})' if result.ok and result.message else ''),
+                    values,
+                    view,
+                ),
+            )
+        )
 
 
 def main(argv=None) -> int:

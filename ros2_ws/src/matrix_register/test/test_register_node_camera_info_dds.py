@@ -23,8 +23,8 @@ from ros_helpers import spin_for, spin_until, start_node, stop, wait_matched
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
 VIEW = 'D5'
-ORPHAN_S, REFERENCE_S = 0.5, 1.0          # stamps: an image without CameraInfo, the reference image
-FRAME_S = {2.0: 0, 2.5: 2, 3.0: 4}        # stamp -> frame of the sample
+ORPHAN_S, REFERENCE_S = 0.5, 1.0  # stamps: an image without CameraInfo, the reference image
+FRAME_S = {2.0: 0, 2.5: 2, 3.0: 4}  # stamp -> frame of the sample
 
 
 def test_reference_from_camera_info_over_dds(matrix_sample, node_executable):
@@ -35,8 +35,9 @@ def test_reference_from_camera_info_over_dds(matrix_sample, node_executable):
     got = {}
     node = Node('register_camera_info_test')
     try:
-        homographies = node.create_subscription(HomographyStamped, f'/{VIEW}/homography',
-                                                lambda m: got.__setitem__(stamp_to_seconds(m.header.stamp), m), 10)
+        homographies = node.create_subscription(
+            HomographyStamped, f'/{VIEW}/homography', lambda m: got.__setitem__(stamp_to_seconds(m.header.stamp), m), 10
+        )
         image_pub = node.create_publisher(Image, f'/{VIEW}/image_raw', 10)
         info_pub = node.create_publisher(CameraInfo, f'/{VIEW}/camera_info', 10)
         wait_matched(node, [image_pub, info_pub, homographies], [register], 120.0)
@@ -54,7 +55,7 @@ def test_reference_from_camera_info_over_dds(matrix_sample, node_executable):
         info_pub.publish(camera_to_camera_info(ref_cam, header(REFERENCE_S)))
         for seconds, frame in FRAME_S.items():
             image_pub.publish(image_to_msg(dataset.load_image(VIEW, frame), header(seconds)))
-            spin_until(node, lambda: seconds in got, [register], 60.0)   # one frame at a time
+            spin_until(node, lambda: seconds in got, [register], 60.0)  # one frame at a time
         spin_until(node, lambda: len(got) >= 2 + len(FRAME_S), [register], 60.0)
         alive = register.poll() is None
     finally:

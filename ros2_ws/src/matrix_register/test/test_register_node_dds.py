@@ -35,21 +35,30 @@ FRAMES = 3
 def test_register_node_over_dds(matrix_sample, node_executable):
     dataset = MatrixDataset(matrix_sample)
     views = '[' + ','.join(VIEWS) + ']'
-    register = start_node(node_executable('matrix_register', 'register'), f'views:={views}',
-                          f'reference_dataset:={matrix_sample}')
+    register = start_node(
+        node_executable('matrix_register', 'register'), f'views:={views}', f'reference_dataset:={matrix_sample}'
+    )
     rclpy.init()
     got = {v: [] for v in VIEWS}
     diags = []
     node = Node('register_test_listener')
     player = None
     try:
-        homographies = [node.create_subscription(HomographyStamped, f'/{v}/homography',
-                                                 lambda m, v=v: got[v].append(m), 10) for v in VIEWS]
+        homographies = [
+            node.create_subscription(HomographyStamped, f'/{v}/homography', lambda m, v=v: got[v].append(m), 10)
+            for v in VIEWS
+        ]
         node.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 10)
         # Start the images only once the register node is up and this listener is connected to it.
         wait_matched(node, homographies, [register], 120.0)
-        player = start_node(node_executable('matrix_ros', 'dataset_player'), f'dataset:={matrix_sample}',
-                            f'views:={views}', f'max_frames:={FRAMES}', 'rate:=2.0', 'wait_for_subscribers:=1')
+        player = start_node(
+            node_executable('matrix_ros', 'dataset_player'),
+            f'dataset:={matrix_sample}',
+            f'views:={views}',
+            f'max_frames:={FRAMES}',
+            'rate:=2.0',
+            'wait_for_subscribers:=1',
+        )
         spin_until(node, lambda: all(len(m) >= FRAMES for m in got.values()), [register, player], 120.0)
 
         # Bad input: an image whose data is too short. The node must say so and keep running.
@@ -59,18 +68,20 @@ def test_register_node_over_dds(matrix_sample, node_executable):
         bad.header.stamp.sec = 99
 
         def bad_reported():
-            return any(s.level == DiagnosticStatus.ERROR and 'bad input' in s.message
-                       for d in diags for s in d.status)
+            return any(s.level == DiagnosticStatus.ERROR and 'bad input' in s.message for d in diags for s in d.status)
 
-        deadline = time.monotonic() + 30.0   # sent again each second: the new publisher may not be matched yet
+        deadline = time.monotonic() + 30.0  # sent again each second: the new publisher may not be matched yet
         while time.monotonic() < deadline and not bad_reported() and register.poll() is None:
             bad_pub.publish(bad)
             spin_until(node, bad_reported, [register], 1.0)
         alive = register.poll() is None
         # The replay starts over: the first frame again at its first stamp, long after the last one.
         count = len(got[VIEWS[0]])
-        bad_pub.publish(image_to_msg(dataset.load_image(VIEWS[0], dataset.frames[0]),
-                                     Header(stamp=seconds_to_stamp(1.0), frame_id='world')))
+        bad_pub.publish(
+            image_to_msg(
+                dataset.load_image(VIEWS[0], dataset.frames[0]), Header(stamp=seconds_to_stamp(1.0), frame_id='world')
+            )
+        )
         spin_until(node, lambda: len(got[VIEWS[0]]) > count, [register], 60.0)
         restarted = got[VIEWS[0]][count:]
     finally:
@@ -85,7 +96,7 @@ def test_register_node_over_dds(matrix_sample, node_executable):
     assert restarted and stamp_to_seconds(restarted[0].header.stamp) == 1.0, log
     assert restarted[0].status == 'ok' and restarted[0].reference_id == f'{VIEWS[0]}/reference', restarted[0].status
     assert f'{VIEWS[0]}: t=1.000 s: time went back, starting this drone afresh' in register_out, log
-    failed = [m for m in got[VIEWS[0]] if m.header.stamp.sec == 99]   # downstream learns of it too
+    failed = [m for m in got[VIEWS[0]] if m.header.stamp.sec == 99]  # downstream learns of it too
     assert failed and failed[0].status.startswith('failed: bad input') and not any(failed[0].h_img_to_ground), log
 
     for view in VIEWS:

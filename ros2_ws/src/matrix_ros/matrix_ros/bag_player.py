@@ -49,21 +49,28 @@ class BagPlayer(Node):
             raise FileNotFoundError(f'not a rosbag2 folder (no metadata.yaml): {s.bag}')
         self.sequence_clock = read_sequence_clock(s.bag, note=self.get_logger().warning)
         self.topics = {t: msgtype for t, msgtype in connections(s.bag).items() if not s.topics or t in s.topics}
-        self.damage = ''   # why the bag could not be played to its end ('' when it was)
+        self.damage = ''  # why the bag could not be played to its end ('' when it was)
         qos = publisher_qos(s.qos)
         self.pubs = {t: self.create_publisher(message_class(msgtype), t, qos) for t, msgtype in self.topics.items()}
         self.clock_pub = self.create_publisher(Clock, '/clock', 10)
-        self.skipped = 0     # frames due (start_at) before the player was ready
+        self.skipped = 0  # frames due (start_at) before the player was ready
         self.lockstep_sub, self.spinner = None, make_executor()
         self.spinner.add_node(self)
-        self.lockstep = LockstepWindow(s.lockstep_window, s.lockstep_count, s.lockstep_timeout, self._spin_for,
-                                       self.get_logger().warning)
+        self.lockstep = LockstepWindow(
+            s.lockstep_window, s.lockstep_count, s.lockstep_timeout, self._spin_for, self.get_logger().warning
+        )
         if s.lockstep:
-            self.lockstep_sub = self.create_subscription(message_class(s.lockstep_type), s.lockstep_topic,
-                                                         self.lockstep.on_message, qos_by_name(s.lockstep_qos, 50))
-        self.get_logger().info(f'playing {s.bag}: {len(self.pubs)} topics, '
-                               + (f'lockstep on {s.lockstep_topic}' if s.lockstep else f'rate {s.rate}')
-                               + f'; sequence clock: {self.sequence_clock.describe()}')
+            self.lockstep_sub = self.create_subscription(
+                message_class(s.lockstep_type),
+                s.lockstep_topic,
+                self.lockstep.on_message,
+                qos_by_name(s.lockstep_qos, 50),
+            )
+        self.get_logger().info(
+            f'playing {s.bag}: {len(self.pubs)} topics, '
+            + (f'lockstep on {s.lockstep_topic}' if s.lockstep else f'rate {s.rate}')
+            + f'; sequence clock: {self.sequence_clock.describe()}'
+        )
 
     def _spin_for(self, seconds: float, until=lambda: False):
         deadline = time.monotonic() + seconds
@@ -96,14 +103,17 @@ class BagPlayer(Node):
             subscribers = SubscribersReady(image_pubs, s.wait_for_subscribers)
             while rclpy.ok() and not subscribers.ready(time.monotonic()):
                 if short := subscribers.short():
-                    self.get_logger().info('still waiting: ' + ', '.join(f'{t} {n}/{s.wait_for_subscribers}'
-                                           for t, n in sorted(short.items())), throttle_duration_sec=10.0)
+                    self.get_logger().info(
+                        'still waiting: '
+                        + ', '.join(f'{t} {n}/{s.wait_for_subscribers}' for t, n in sorted(short.items())),
+                        throttle_duration_sec=10.0,
+                    )
                 self._spin_for(0.1)
         if self.lockstep_sub is not None and self.lockstep_sub.get_publisher_count() < 1:
             self.get_logger().info(f'waiting for a publisher on {s.lockstep_topic}')
             self._spin_for(3600, lambda: self.lockstep_sub.get_publisher_count() >= 1)
         count, previous_ns, wall_start, bag_start = 0, None, time.monotonic(), None
-        if s.start_at:   # players of several hosts release frame k together (cameras on a common clock)
+        if s.start_at:  # players of several hosts release frame k together (cameras on a common clock)
             wall_start += s.start_at - time.time()
         for time_ns, group in self.frames():
             if not rclpy.ok():
@@ -113,7 +123,7 @@ class BagPlayer(Node):
             if not s.lockstep:  # recorded timing, scaled
                 due = wall_start + (time_ns - bag_start) * 1e-9 / s.rate
                 if s.start_at and time.monotonic() - due > 0.5 * self.sequence_clock.frame_period / s.rate:
-                    self.skipped += 1   # ready too late for it: a live camera publishes the present
+                    self.skipped += 1  # ready too late for it: a live camera publishes the present
                     continue
                 self._spin_for(max(0.0, due - time.monotonic()))
             self.clock_pub.publish(Clock(clock=seconds_to_stamp(time_ns * 1e-9)))
@@ -121,19 +131,26 @@ class BagPlayer(Node):
                 self.pubs[topic].publish(raw)
             count += 1
             if s.lockstep:
-                self.lockstep.sent(time_ns * 1e-9, f'frame {self.sequence_clock.frame_ns(time_ns)} '
-                                   f'(t={time_ns * 1e-9:.3f} s) on {s.lockstep_topic}')
+                self.lockstep.sent(
+                    time_ns * 1e-9,
+                    f'frame {self.sequence_clock.frame_ns(time_ns)} (t={time_ns * 1e-9:.3f} s) on {s.lockstep_topic}',
+                )
             previous_ns = time_ns
         self.lockstep.finish()
         timed_out = self.lockstep.timed_out
         # Reliable subscribers must get the last frame before the process exits.
         for pub in [*self.pubs.values(), self.clock_pub]:
             pub.wait_for_all_acked(Duration(seconds=5.0))
-        self.get_logger().info(f'played {count} frames'
-                               + (f' up to frame {self.sequence_clock.frame_ns(previous_ns)} '
-                                  f'(t={previous_ns * 1e-9:.3f} s)' if previous_ns else '')
-                               + (f'; lockstep timed out for {len(timed_out)} of them' if timed_out else '')
-                               + (f'; skipped {self.skipped} frames due before it was ready' if self.skipped else ''))
+        self.get_logger().info(
+            f'played {count} frames'
+            + (
+                f' up to frame {self.sequence_clock.frame_ns(previous_ns)} (t={previous_ns * 1e-9:.3f} s)'
+                if previous_ns
+                else ''
+            )
+            + (f'; lockstep timed out for {len(timed_out)} of them' if timed_out else '')
+            + (f'; skipped {self.skipped} frames due before it was ready' if self.skipped else '')
+        )
         return count
 
 

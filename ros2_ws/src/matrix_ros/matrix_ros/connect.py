@@ -46,16 +46,18 @@ class SubscribeWhenConnected:
         if waiting:
             if not self.announced:
                 self.announced = True
-                self.node.get_logger().info(f'{self.name}: waiting for a publisher on {", ".join(waiting)} '
-                                            'before subscribing its images')
+                self.node.get_logger().info(
+                    f'{self.name}: waiting for a publisher on {", ".join(waiting)} before subscribing its images'
+                )
             return
         self.connected = True
         self.subscribe()
         if self.timer is not None:
             self.node.destroy_timer(self.timer)
             self.timer = None
-        self.node.get_logger().info(f'{self.name}: {", ".join(s.topic_name for s in self.needs)} connected; '
-                                    'images subscribed')
+        self.node.get_logger().info(
+            f'{self.name}: {", ".join(s.topic_name for s in self.needs)} connected; images subscribed'
+        )
 
 
 class SubscribersReady:

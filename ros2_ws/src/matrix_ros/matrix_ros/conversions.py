@@ -17,9 +17,9 @@ from matrix_core.register.registration import Registration
 ConversionError = fields.ConversionError
 is_jpeg = fields.is_jpeg
 stamp_to_seconds = fields.stamp_seconds
-header_stamp_ns = fields.stamp_ns               # Header -> integer nanoseconds
-msg_to_image = fields.image_from_msg            # sensor_msgs/Image -> (H, W, 3) BGR uint8
-compressed_to_image = fields.image_from_msg     # CompressedImage (jpeg/png, optional JPEG reduction) -> BGR
+header_stamp_ns = fields.stamp_ns  # Header -> integer nanoseconds
+msg_to_image = fields.image_from_msg  # sensor_msgs/Image -> (H, W, 3) BGR uint8
+compressed_to_image = fields.image_from_msg  # CompressedImage (jpeg/png, optional JPEG reduction) -> BGR
 gray_image_from_msg = fields.gray_image_from_msg  # Image or CompressedImage -> (H, W) grey, full size
 camera_info_to_camera = fields.camera_from_camera_info
 registration_from_msg = fields.registration_from_msg

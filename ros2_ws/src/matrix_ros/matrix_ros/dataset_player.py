@@ -26,17 +26,20 @@ from matrix_ros.qos import publisher_qos, qos_by_name
 class DatasetPlayerSettings:
     dataset: str = field(default='', metadata={'help': 'MATRIX, Wildtrack or MultiviewX folder to publish'})
     rate: float = field(default=1.0, metadata={'help': 'playback speed factor (1.0 = recorded 0.5 s period)'})
-    frame_period: float = field(default=DEFAULT_CLOCK.frame_period, metadata={
-        'help': 'seconds between recorded frames'})
-    start_time: float = field(default=DEFAULT_CLOCK.start_time, metadata={
-        'help': 'header stamp of the first frame, seconds'})
+    frame_period: float = field(
+        default=DEFAULT_CLOCK.frame_period, metadata={'help': 'seconds between recorded frames'}
+    )
+    start_time: float = field(
+        default=DEFAULT_CLOCK.start_time, metadata={'help': 'header stamp of the first frame, seconds'}
+    )
     views: list[str] = field(default_factory=list, metadata={'help': 'views to publish (empty = all)'})
     max_frames: int = field(default=0, metadata={'help': 'publish at most this many frames (0 = all)'})
     loop: bool = field(default=False, metadata={'help': 'start again after the last frame'})
     compressed: bool = field(default=False, metadata={'help': 'publish image/compressed instead of image_raw'})
     qos: str = field(default='reliable', metadata={'help': 'QoS of the image topics: reliable or sensor_data'})
     wait_for_subscribers: int = field(
-        default=0, metadata={'help': 'wait until each image topic has this many subscribers before starting'})
+        default=0, metadata={'help': 'wait until each image topic has this many subscribers before starting'}
+    )
 
     def __post_init__(self):
         if self.rate <= 0 or self.frame_period <= 0:
@@ -56,14 +59,17 @@ class DatasetPlayer(Node):
         qos = publisher_qos(s.qos)
         self.image_pubs, self.info_pubs = {}, {}
         for view in self.views:
-            self.image_pubs[view] = self.create_publisher(CompressedImage if s.compressed else Image,
-                                                          topics.image_topic(view, s.compressed), qos)
+            self.image_pubs[view] = self.create_publisher(
+                CompressedImage if s.compressed else Image, topics.image_topic(view, s.compressed), qos
+            )
             self.info_pubs[view] = self.create_publisher(CameraInfo, topics.camera_info_topic(view), publisher_qos())
         self.subscribers = SubscribersReady(self.image_pubs, s.wait_for_subscribers)
         self.index = 0
         self.timer = self.create_timer(s.frame_period / s.rate, self._tick)
-        self.get_logger().info(f'publishing {len(self.frames)} frames x {len(self.views)} views '
-                               f'of {s.dataset} at {1.0 / s.frame_period * s.rate:.2f} Hz')
+        self.get_logger().info(
+            f'publishing {len(self.frames)} frames x {len(self.views)} views '
+            f'of {s.dataset} at {1.0 / s.frame_period * s.rate:.2f} Hz'
+        )
 
     def _ready(self) -> bool:
         return self.subscribers.ready(time.monotonic())

@@ -5,14 +5,19 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from std_msgs.msg import Header
 
 OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
-MESSAGE_CHARS = 250   # keep a status readable in rqt / `ros2 topic echo`
+MESSAGE_CHARS = 250  # keep a status readable in rqt / `ros2 topic echo`
 
 
 def status(name: str, level, message: str, values=(), hardware_id: str = '') -> DiagnosticStatus:
     """A DiagnosticStatus; ``values`` is a dict or (key, value) pairs (values shown with ``str``)."""
     pairs = values.items() if isinstance(values, dict) else values
-    return DiagnosticStatus(level=level, name=name, message=message[:MESSAGE_CHARS], hardware_id=hardware_id,
-                            values=[KeyValue(key=k, value=str(v)) for k, v in pairs])
+    return DiagnosticStatus(
+        level=level,
+        name=name,
+        message=message[:MESSAGE_CHARS],
+        hardware_id=hardware_id,
+        values=[KeyValue(key=k, value=str(v)) for k, v in pairs],
+    )
 
 
 def array(header_or_stamp, *statuses: DiagnosticStatus) -> DiagnosticArray:

@@ -28,7 +28,7 @@ from typing import Callable
 
 from matrix_ros.conversions import gray_image_from_msg, msg_to_image, stamp_to_seconds
 
-MAX_WAITING_IMAGES = 8   # per drone, 4 s at 2 Hz: a passing backlog; about 25 MB of 1080p images and messages
+MAX_WAITING_IMAGES = 8  # per drone, 4 s at 2 Hz: a passing backlog; about 25 MB of 1080p images and messages
 
 
 @dataclass(frozen=True)
@@ -83,7 +83,9 @@ class DroneLink:
                 self._queue.remove(images[0])
                 self._node.get_logger().warning(
                     f'{images[0][1]}: calib is {MAX_WAITING_IMAGES} images behind: the image of '
-                    f't={stamp_to_seconds(images[0][2].header.stamp):.3f} s is not calibrated', throttle_duration_sec=5.0)
+                    f't={stamp_to_seconds(images[0][2].header.stamp):.3f} s is not calibrated',
+                    throttle_duration_sec=5.0,
+                )
         self._wake.trigger()
 
     def _make_queued_calls(self) -> None:
@@ -102,7 +104,7 @@ class DroneLink:
         """register received ``msg`` of ``view``, decoded as ``image`` (None: undecodable; calib decodes it
         itself and reports the bad input)."""
         if self.shared:
-            self._call(self._on_image, view, msg, image, time.perf_counter())   # received now, whenever calib runs
+            self._call(self._on_image, view, msg, image, time.perf_counter())  # received now, whenever calib runs
 
     def registration(self, view: str, msg) -> None:
         """register published ``msg`` (HomographyStamped, ok or failed) for an image of ``view``."""

@@ -11,7 +11,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from matrix_ros import diagnostics
 
-PERSON_HEIGHT_M, PERSON_DIAMETER_M = 1.8, 0.5   # the RViz cylinder of a track
+PERSON_HEIGHT_M, PERSON_DIAMETER_M = 1.8, 0.5  # the RViz cylinder of a track
 
 
 def tracks_msg(header, tracks) -> TrackArray:
@@ -44,8 +44,18 @@ def detections_2d_msg(header, boxes) -> Detection2DArray:
     msg = Detection2DArray(header=header)
     for b in boxes:
         x0, y0, x1, y1 = (float(v) for v in b.box)
-        msg.detections.append(Detection2D(id=int(b.track_id), score=float(b.score), x_min=x0, y_min=y0, x_max=x1,
-                                          y_max=y1, distance_m=float(b.distance_m), occluded=bool(b.occluded)))
+        msg.detections.append(
+            Detection2D(
+                id=int(b.track_id),
+                score=float(b.score),
+                x_min=x0,
+                y_min=y0,
+                x_max=x1,
+                y_max=y1,
+                distance_m=float(b.distance_m),
+                occluded=bool(b.occluded),
+            )
+        )
     return msg
 
 
@@ -68,10 +78,16 @@ def markers_msg(header, tracks) -> MarkerArray:
         body.pose.orientation.w = 1.0
         body.scale.x = body.scale.y = PERSON_DIAMETER_M
         body.scale.z = PERSON_HEIGHT_M
-        hue = (t.track_id * 0.618034) % 1.0   # distinct, stable colour per id
+        hue = (t.track_id * 0.618034) % 1.0  # distinct, stable colour per id
         body.color.r, body.color.g, body.color.b, body.color.a = hue, 1.0 - hue, 0.5, 0.8
-        text = Marker(header=header, ns='track_ids', id=t.track_id, type=Marker.TEXT_VIEW_FACING,
-                      action=Marker.ADD, text=str(t.track_id))
+        text = Marker(
+            header=header,
+            ns='track_ids',
+            id=t.track_id,
+            type=Marker.TEXT_VIEW_FACING,
+            action=Marker.ADD,
+            text=str(t.track_id),
+        )
         text.pose.position.x, text.pose.position.y, text.pose.position.z = float(t.xy[0]), float(t.xy[1]), 2.2
         text.pose.orientation.w = 1.0
         text.scale.z = 0.6
@@ -86,7 +102,7 @@ def heatmap_msg(header, grid, heatmap) -> OccupancyGrid:
     msg = OccupancyGrid(header=header)
     msg.info.map_load_time = header.stamp
     msg.info.resolution = float(grid.cell)
-    msg.info.height, msg.info.width = grid.shape          # rows along world y, like the heatmap
+    msg.info.height, msg.info.width = grid.shape  # rows along world y, like the heatmap
     msg.info.origin.position.x, msg.info.origin.position.y = float(grid.x_min), float(grid.y_min)
     msg.info.origin.orientation.w = 1.0
     if heatmap is None:
@@ -99,28 +115,47 @@ def heatmap_msg(header, grid, heatmap) -> OccupancyGrid:
 def missing_views_text(frame, result) -> str:
     """The log line of a frame fused without some views, naming each and why ('' when none is missing)."""
     missing = [v for v, st in result.views.items() if not st.available]
-    return (f't={frame.stamp:.3f} s: fused {len(result.views) - len(missing)}/{len(result.views)} views '
-            f'({frame.reason}); missing: ' + '; '.join(f'{v}: {result.views[v].reason}' for v in missing)
-            if missing else '')
+    return (
+        f't={frame.stamp:.3f} s: fused {len(result.views) - len(missing)}/{len(result.views)} views '
+        f'({frame.reason}); missing: ' + '; '.join(f'{v}: {result.views[v].reason}' for v in missing)
+        if missing
+        else ''
+    )
 
 
-def fuse_diagnostics(header, frame, result, wait_s: float, latency_s: float, late_messages: int,
-                     frames_published: int):
+def fuse_diagnostics(header, frame, result, wait_s: float, latency_s: float, late_messages: int, frames_published: int):
     """``fuse/<view>`` (used or missing and why, registration confidence) and a ``fuse`` summary (sync
     reason, counts, timings, wait, latency, resets, late messages) of one fused frame."""
     statuses = []
     for view, st in result.views.items():
-        statuses.append(diagnostics.status(
-            f'fuse/{view}', diagnostics.OK if st.available else diagnostics.WARN,
-            'used' if st.available else f'missing: {st.reason}',
-            {'available': st.available, 'confidence': '' if st.confidence is None else f'{st.confidence:.3f}'},
-            view))
+        statuses.append(
+            diagnostics.status(
+                f'fuse/{view}',
+                diagnostics.OK if st.available else diagnostics.WARN,
+                'used' if st.available else f'missing: {st.reason}',
+                {'available': st.available, 'confidence': '' if st.confidence is None else f'{st.confidence:.3f}'},
+                view,
+            )
+        )
     used = len(result.available_views)
     level = diagnostics.OK if used == len(result.views) else (diagnostics.WARN if used else diagnostics.ERROR)
-    summary = diagnostics.status('fuse', level, f'{used}/{len(result.views)} views, {len(result.tracks)} tracks', (
-        ('stamp', f'{frame.stamp:.6f}'), ('sync', frame.reason), ('views_used', used),
-        ('detections', len(result.detections)), ('tracks', len(result.tracks)),
-        *((k, f'{v:.4f}') for k, v in result.timing.items()),
-        ('wait_s', f'{wait_s:.4f}'), ('latency_s', f'{latency_s:.4f}'), ('resets', ','.join(result.resets)),
-        ('late_messages', late_messages), ('frames_published', frames_published)), 'fuse')
+    summary = diagnostics.status(
+        'fuse',
+        level,
+        f'{used}/{len(result.views)} views, {len(result.tracks)} tracks',
+        (
+            ('stamp', f'{frame.stamp:.6f}'),
+            ('sync', frame.reason),
+            ('views_used', used),
+            ('detections', len(result.detections)),
+            ('tracks', len(result.tracks)),
+            *((k, f'{v:.4f}') for k, v in result.timing.items()),
+            ('wait_s', f'{wait_s:.4f}'),
+            ('latency_s', f'{latency_s:.4f}'),
+            ('resets', ','.join(result.resets)),
+            ('late_messages', late_messages),
+            ('frames_published', frames_published),
+        ),
+        'fuse',
+    )
     return diagnostics.array(header, summary, *statuses)

@@ -19,13 +19,18 @@ class ImageOutputs:
 
     def __init__(self, node, settings):
         s, self.node = settings, node
-        self.cameras = (ViewCameras.from_dataset(s, s.scene_dataset, s.views) if s.scene_dataset
-                        else ViewCameras(s))
+        self.cameras = ViewCameras.from_dataset(s, s.scene_dataset, s.views) if s.scene_dataset else ViewCameras(s)
         qos = publisher_qos()
-        self.boxes = {v: node.create_publisher(Detection2DArray, s.topic(s.detections_2d_topic, v), qos)
-                      for v in s.views} if s.detections_2d_topic else {}
-        self.overlays = {v: node.create_publisher(CompressedImage, s.topic(s.overlay_topic, v), qos)
-                         for v in self.boxes} if s.overlay else {}
+        self.boxes = (
+            {v: node.create_publisher(Detection2DArray, s.topic(s.detections_2d_topic, v), qos) for v in s.views}
+            if s.detections_2d_topic
+            else {}
+        )
+        self.overlays = (
+            {v: node.create_publisher(CompressedImage, s.topic(s.overlay_topic, v), qos) for v in self.boxes}
+            if s.overlay
+            else {}
+        )
         if self.boxes and s.input_kind == 'homography' and not self.cameras.intrinsics:
             node.get_logger().warning('no detections_2d from homographies: scene_dataset (the intrinsics) is not set')
 

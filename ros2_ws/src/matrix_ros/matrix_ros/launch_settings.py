@@ -47,10 +47,13 @@ def check_arguments(argv, known) -> None:
 
     unknown = [a.split(':=', 1)[0] for a in argv if ':=' in a and a.split(':=', 1)[0] not in known]
     if unknown:
-        hints = [f'{n!r} (did you mean {m[0]!r}?)' if (m := difflib.get_close_matches(n, known, 1)) else repr(n)
-                 for n in unknown]
-        raise ValueError(f'unknown launch argument(s) {", ".join(hints)}; the arguments are: '
-                         f'{", ".join(sorted(known))}')
+        hints = [
+            f'{n!r} (did you mean {m[0]!r}?)' if (m := difflib.get_close_matches(n, known, 1)) else repr(n)
+            for n in unknown
+        ]
+        raise ValueError(
+            f'unknown launch argument(s) {", ".join(hints)}; the arguments are: {", ".join(sorted(known))}'
+        )
 
 
 def node_parameters(settings) -> dict:
@@ -76,7 +79,14 @@ def settings_launch_description(package: str, executable: str, cls, defaults: di
 
     def node(context):
         settings = settings_from_launch(cls, context)
-        return [Node(package=package, executable=executable, name=executable, output='screen',
-                     parameters=[node_parameters(settings)])]
+        return [
+            Node(
+                package=package,
+                executable=executable,
+                name=executable,
+                output='screen',
+                parameters=[node_parameters(settings)],
+            )
+        ]
 
     return LaunchDescription(declare_arguments(cls, defaults, required) + [OpaqueFunction(function=node)])

@@ -31,23 +31,36 @@ from matrix_ros.qos import publisher_qos, qos_by_name
 
 @dataclass
 class LinkSenderSettings:
-    views: list[str] = field(default_factory=list, metadata={
-        'help': "drones whose images to send (empty: the drone of the node's namespace)"})
-    image_topic: str = field(default=topics.IMAGE_COMPRESSED, metadata={
-        'help': "the camera's CompressedImage stream, relative to the drone"})
-    link_topic: str = field(default=topics.LINK_IMAGE_COMPRESSED, metadata={
-        'help': 'the stream across the link, relative to the drone (what the ground reads)'})
-    dropped_topic: str = field(default=topics.LINK_DROPPED, metadata={
-        'help': 'the headers of the frames not sent (std_msgs/Header), relative to the drone'})
-    link_mbit: float = field(default=0.0, metadata={
-        'help': "Mbit/s of the drone's link the images may use (leave room for geometry, diagnostics and "
-                'discovery); a frame leaves once the ones before it had time to cross; 0: every frame'})
+    views: list[str] = field(
+        default_factory=list,
+        metadata={'help': "drones whose images to send (empty: the drone of the node's namespace)"},
+    )
+    image_topic: str = field(
+        default=topics.IMAGE_COMPRESSED, metadata={'help': "the camera's CompressedImage stream, relative to the drone"}
+    )
+    link_topic: str = field(
+        default=topics.LINK_IMAGE_COMPRESSED,
+        metadata={'help': 'the stream across the link, relative to the drone (what the ground reads)'},
+    )
+    dropped_topic: str = field(
+        default=topics.LINK_DROPPED,
+        metadata={'help': 'the headers of the frames not sent (std_msgs/Header), relative to the drone'},
+    )
+    link_mbit: float = field(
+        default=0.0,
+        metadata={
+            'help': "Mbit/s of the drone's link the images may use (leave room for geometry, diagnostics and "
+            'discovery); a frame leaves once the ones before it had time to cross; 0: every frame'
+        },
+    )
 
     def __post_init__(self):
-        LinkGate(self.link_mbit)   # raises naming the setting
+        LinkGate(self.link_mbit)  # raises naming the setting
         if len({self.image_topic, self.link_topic, self.dropped_topic}) < 3:
-            raise ValueError('image_topic, link_topic and dropped_topic must differ, got '
-                             f'{self.image_topic!r}, {self.link_topic!r}, {self.dropped_topic!r}')
+            raise ValueError(
+                'image_topic, link_topic and dropped_topic must differ, got '
+                f'{self.image_topic!r}, {self.link_topic!r}, {self.dropped_topic!r}'
+            )
 
 
 class LinkSender(Node):
@@ -58,11 +71,18 @@ class LinkSender(Node):
         self.gates = {}
         for view, prefix in hosted_drones(self, s.views):
             self.gates[view] = LinkGate(s.link_mbit)
-            pubs = (self.create_publisher(CompressedImage, topics.drone_topic(prefix, s.link_topic),
-                                          publisher_qos('sensor_data')),
-                    self.create_publisher(Header, topics.drone_topic(prefix, s.dropped_topic), publisher_qos()))
-            self.create_subscription(CompressedImage, topics.drone_topic(prefix, s.image_topic),
-                                     lambda msg, v=view, p=pubs: self._frame(v, *p, msg), qos_by_name('reliable', 2))
+            pubs = (
+                self.create_publisher(
+                    CompressedImage, topics.drone_topic(prefix, s.link_topic), publisher_qos('sensor_data')
+                ),
+                self.create_publisher(Header, topics.drone_topic(prefix, s.dropped_topic), publisher_qos()),
+            )
+            self.create_subscription(
+                CompressedImage,
+                topics.drone_topic(prefix, s.image_topic),
+                lambda msg, v=view, p=pubs: self._frame(v, *p, msg),
+                qos_by_name('reliable', 2),
+            )
         budget = f'{s.link_mbit:g} Mbit/s' if s.link_mbit else 'no budget: every frame'
         self.get_logger().info(f'sending {", ".join(self.gates)}: {s.image_topic} -> {s.link_topic}, {budget}')
 
@@ -78,10 +98,24 @@ class LinkSender(Node):
             pub.publish(msg)
             level, why = diagnostics.OK, 'sent'
         c = gate.counts
-        self.diagnostics.publish(diagnostics.array(msg.header.stamp, diagnostics.status(
-            f'link_sender/{view}', level, why, {'outcome': outcome, 'bytes': len(msg.data), 'sent': c.sent,
-                                                'dropped': c.dropped, 'link_busy_s': f'{busy_s:.3f}'},
-            hardware_id=view)))
+        self.diagnostics.publish(
+            diagnostics.array(
+                msg.header.stamp,
+                diagnostics.status(
+                    f'link_sender/{view}',
+                    level,
+                    why,
+                    {
+                        'outcome': outcome,
+                        'bytes': len(msg.data),
+                        'sent': c.sent,
+                        'dropped': c.dropped,
+                        'link_busy_s': f'{busy_s:.3f}',
+                    },
+                    hardware_id=view,
+                ),
+            )
+        )
 
 
 def main(argv=None) -> int:

@@ -14,18 +14,18 @@ from matrix_ros.conversions import stamp_to_seconds
 
 class LockstepWindow:
     """Args:
-        window: frames out at most; count: lockstep messages that release a frame;
-        timeout: seconds to wait for one frame's release before going on (the frame then counts as timed out);
-        spin_for: ``spin_for(seconds, until)`` spins the node until ``until()`` or the time is up;
-        warn: logs a warning line.
+    window: frames out at most; count: lockstep messages that release a frame;
+    timeout: seconds to wait for one frame's release before going on (the frame then counts as timed out);
+    spin_for: ``spin_for(seconds, until)`` spins the node until ``until()`` or the time is up;
+    warn: logs a warning line.
     """
 
     def __init__(self, window: int, count: int, timeout: float, spin_for: Callable, warn: Callable[[str], None]):
         if window < 1 or count < 1 or timeout <= 0:
             raise ValueError(f'lockstep needs window >= 1, count >= 1, timeout > 0 (got {window}, {count}, {timeout})')
         self.window, self.count, self.timeout, self.spin_for, self.warn = window, count, timeout, spin_for, warn
-        self.released = {}   # stamp (s) -> lockstep messages seen
-        self.out = []        # stamps published and not released yet, oldest first
+        self.released = {}  # stamp (s) -> lockstep messages seen
+        self.out = []  # stamps published and not released yet, oldest first
         self.timed_out = []  # stamps whose release never came
 
     def on_message(self, msg) -> None:
@@ -54,5 +54,7 @@ class LockstepWindow:
         self.spin_for(self.timeout, lambda: self.released.get(stamp, 0) >= self.count)
         if self.released.get(stamp, 0) < self.count:
             self.timed_out.append(stamp)
-            self.warn(f'lockstep: only {self.released.get(stamp, 0)}/{self.count} messages for {describe} after '
-                      f'{self.timeout} s; going on')
+            self.warn(
+                f'lockstep: only {self.released.get(stamp, 0)}/{self.count} messages for {describe} after '
+                f'{self.timeout} s; going on'
+            )

@@ -14,15 +14,23 @@ from matrix_ros.qos import QOS_NAMES, qos_by_name
 
 @dataclass
 class NodeSettings:
-    qos: str = field(default='reliable', metadata={
-        'help': f'QoS of the image subscriptions, one of {", ".join(QOS_NAMES)} (reliable: large images '
-                'survive; sensor_data: best effort)'})
-    threads: int = field(default=1, metadata={
-        'help': 'OpenCV and BLAS (numpy) worker threads of this process (1: one core; idle pool threads of '
-                'many processes on few cores cost CPU)'})
+    qos: str = field(
+        default='reliable',
+        metadata={
+            'help': f'QoS of the image subscriptions, one of {", ".join(QOS_NAMES)} (reliable: large images '
+            'survive; sensor_data: best effort)'
+        },
+    )
+    threads: int = field(
+        default=1,
+        metadata={
+            'help': 'OpenCV and BLAS (numpy) worker threads of this process (1: one core; idle pool threads of '
+            'many processes on few cores cost CPU)'
+        },
+    )
 
     def __post_init__(self):
-        qos_by_name(self.qos)   # raises naming the valid names
+        qos_by_name(self.qos)  # raises naming the valid names
         if self.threads < 1:
             raise ValueError(f'threads must be >= 1, got {self.threads}')
         if hasattr(super(), '__post_init__'):

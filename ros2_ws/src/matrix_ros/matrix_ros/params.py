@@ -21,14 +21,18 @@ from matrix_core.settings import add_settings_arguments, settings_fields, settin
 from matrix_ros.executor import make_executor
 
 
-OWN_THREAD_DRAIN_S = 10.0   # at exit, longest a node's own thread goes on with the calls handed to it
-SPIN_TIMEOUT_S = 0.5   # longest wait for work before the stop flag is checked (0.1 s cost an idle node 0.7 % of a core)
+OWN_THREAD_DRAIN_S = 10.0  # at exit, longest a node's own thread goes on with the calls handed to it
+SPIN_TIMEOUT_S = 0.5  # longest wait for work before the stop flag is checked (0.1 s cost an idle node 0.7 % of a core)
 
 _PARAM_TYPES = {
-    bool: ParameterType.PARAMETER_BOOL, int: ParameterType.PARAMETER_INTEGER,
-    float: ParameterType.PARAMETER_DOUBLE, str: ParameterType.PARAMETER_STRING,
-    (list, bool): ParameterType.PARAMETER_BOOL_ARRAY, (list, int): ParameterType.PARAMETER_INTEGER_ARRAY,
-    (list, float): ParameterType.PARAMETER_DOUBLE_ARRAY, (list, str): ParameterType.PARAMETER_STRING_ARRAY,
+    bool: ParameterType.PARAMETER_BOOL,
+    int: ParameterType.PARAMETER_INTEGER,
+    float: ParameterType.PARAMETER_DOUBLE,
+    str: ParameterType.PARAMETER_STRING,
+    (list, bool): ParameterType.PARAMETER_BOOL_ARRAY,
+    (list, int): ParameterType.PARAMETER_INTEGER_ARRAY,
+    (list, float): ParameterType.PARAMETER_DOUBLE_ARRAY,
+    (list, str): ParameterType.PARAMETER_STRING_ARRAY,
 }
 
 
@@ -61,8 +65,7 @@ def declare_settings(node, cls, defaults=None, live=(), shared=()):
             param = node.declare_parameter(name, Parameter.Type(param_type), descriptor)
             values[name] = list(param.value) if param.value is not None else []
         else:
-            param = node.declare_parameter(name, list(default) if isinstance(default, tuple) else default,
-                                           descriptor)
+            param = node.declare_parameter(name, list(default) if isinstance(default, tuple) else default, descriptor)
             values[name] = list(param.value) if isinstance(default, (list, tuple)) else param.value
     check_no_unknown_parameters(node, [name for name, *_ in settings_fields(cls)], shared)
     if live:
@@ -77,15 +80,18 @@ def check_no_unknown_parameters(node, names, shared=()) -> None:
     declared later, by the publishers, and are left to rclpy."""
     import difflib
 
-    declared = set(node._parameters)    # rclpy keeps what was given and what was declared, no public getter
+    declared = set(node._parameters)  # rclpy keeps what was given and what was declared, no public getter
     given = getattr(node, '_parameter_overrides', {})
     unknown = sorted(n for n in given if n not in declared and n not in shared and not n.startswith('qos_overrides.'))
     if unknown:
-        known = sorted(set(names) | declared | set(shared))   # shared: what the process takes
-        hints = [f'{n!r} (did you mean {m[0]!r}?)' if (m := difflib.get_close_matches(n, known, 1)) else repr(n)
-                 for n in unknown]
-        raise ValueError(f'{node.get_name()}: unknown parameter(s) {", ".join(hints)}; its parameters are: '
-                         f'{", ".join(known)}')
+        known = sorted(set(names) | declared | set(shared))  # shared: what the process takes
+        hints = [
+            f'{n!r} (did you mean {m[0]!r}?)' if (m := difflib.get_close_matches(n, known, 1)) else repr(n)
+            for n in unknown
+        ]
+        raise ValueError(
+            f'{node.get_name()}: unknown parameter(s) {", ".join(hints)}; its parameters are: {", ".join(known)}'
+        )
 
 
 def _set_live(node, params, live) -> SetParametersResult:
@@ -178,7 +184,7 @@ def _spin_in_thread(node, own, stop: list) -> threading.Thread:
             deadline = time.monotonic() + OWN_THREAD_DRAIN_S
             while own.waiting() and rclpy.ok() and time.monotonic() < deadline:
                 executor.spin_once(timeout_sec=0.1)
-        except BaseException as exc:   # the process stops and raises it, as it would on its main thread
+        except BaseException as exc:  # the process stops and raises it, as it would on its main thread
             thread.error = exc
             stop.append(True)
         finally:

@@ -12,22 +12,37 @@ class BagPlayerSettings:
     topics: list[str] = field(default_factory=list, metadata={'help': 'topics to play (empty = all)'})
     lockstep: bool = field(default=False, metadata={'help': 'wait for lockstep_topic before each next frame'})
     lockstep_topic: str = field(default='', metadata={'help': 'topic whose stamped messages release the next frame'})
-    lockstep_type: str = field(default='', metadata={'help': 'message type of lockstep_topic, e.g. matrix_msgs/msg/TrackArray'})
+    lockstep_type: str = field(
+        default='', metadata={'help': 'message type of lockstep_topic, e.g. matrix_msgs/msg/TrackArray'}
+    )
     lockstep_count: int = field(default=1, metadata={'help': 'messages per frame to wait for on lockstep_topic'})
     lockstep_timeout: float = field(default=30.0, metadata={'help': 'seconds to wait before going on anyway'})
-    lockstep_window: int = field(default=1, metadata={
-        'help': 'lockstep: frames out before the oldest of them must be released; 1: one frame at a time, 2: the '
-                'next frame leaves while the last is finished (the drones register it while fuse fuses the last; '
-                'every stage still gets every frame, in order)'})
-    lockstep_qos: str = field(default='history', metadata={
-        'help': 'QoS of the lockstep subscription: history (also messages published before matching; needs a '
-                'transient-local publisher, as all of this workspace\'s are) or reliable (any publisher)'})
-    wait_for_subscribers: int = field(default=0, metadata={
-        'help': 'before the first frame, wait until every image topic has this many subscribers'})
-    start_at: float = field(default=0.0, metadata={
-        'help': 'without lockstep: wall-clock time (Unix seconds) at which the first frame is due, frame k '
-                'k periods later, so that the players of several hosts publish each frame together; frames '
-                'due before the player is ready are skipped (0: start when ready)'})
+    lockstep_window: int = field(
+        default=1,
+        metadata={
+            'help': 'lockstep: frames out before the oldest of them must be released; 1: one frame at a time, 2: the '
+            'next frame leaves while the last is finished (the drones register it while fuse fuses the last; '
+            'every stage still gets every frame, in order)'
+        },
+    )
+    lockstep_qos: str = field(
+        default='history',
+        metadata={
+            'help': 'QoS of the lockstep subscription: history (also messages published before matching; needs a '
+            'transient-local publisher, as all of this workspace\'s are) or reliable (any publisher)'
+        },
+    )
+    wait_for_subscribers: int = field(
+        default=0, metadata={'help': 'before the first frame, wait until every image topic has this many subscribers'}
+    )
+    start_at: float = field(
+        default=0.0,
+        metadata={
+            'help': 'without lockstep: wall-clock time (Unix seconds) at which the first frame is due, frame k '
+            'k periods later, so that the players of several hosts publish each frame together; frames '
+            'due before the player is ready are skipped (0: start when ready)'
+        },
+    )
     qos: str = field(default='reliable', metadata={'help': 'QoS of the published topics: reliable or sensor_data'})
     exit_when_done: bool = field(default=True, metadata={'help': 'exit after the last frame'})
 

@@ -20,8 +20,9 @@ def qos_by_name(name: str, depth: int = 10) -> QoSProfile:
         return qos_profile_sensor_data
     if name in ('reliable', 'history'):
         durability = DurabilityPolicy.TRANSIENT_LOCAL if name == 'history' else DurabilityPolicy.VOLATILE
-        return QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST,
-                          durability=durability)
+        return QoSProfile(
+            depth=depth, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST, durability=durability
+        )
     raise ValueError(f'unknown QoS {name!r}; choose one of {QOS_NAMES}')
 
 
@@ -29,4 +30,3 @@ def publisher_qos(name: str = 'reliable', depth: int = 10) -> QoSProfile:
     """What this workspace's publishers offer: 'sensor_data' as is, reliable streams transient local
     (the writer keeps its last ``depth`` messages for retransmission anyway; late observers get them)."""
     return qos_profile_sensor_data if name == 'sensor_data' else qos_by_name('history', depth)
-

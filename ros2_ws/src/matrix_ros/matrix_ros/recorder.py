@@ -36,19 +36,35 @@ from matrix_ros.qos import qos_by_name
 class RecorderSettings:
     out: str = field(default='', metadata={'help': 'bag folder to create (must not exist)'})
     topics: list[str] = field(default_factory=list, metadata={'help': 'topics to record'})
-    types: list[str] = field(default_factory=list, metadata={'help': 'message type of each topic, e.g. sensor_msgs/msg/CameraInfo'})
-    tracks_topic: str = field(default='', metadata={'help': 'matrix_msgs/TrackArray topic to export as text (empty: none)'})
+    types: list[str] = field(
+        default_factory=list, metadata={'help': 'message type of each topic, e.g. sensor_msgs/msg/CameraInfo'}
+    )
+    tracks_topic: str = field(
+        default='', metadata={'help': 'matrix_msgs/TrackArray topic to export as text (empty: none)'}
+    )
     mot_file: str = field(default='', metadata={'help': 'text file for the tracks (default: OUT.tracks.txt)'})
-    sequence_bag: str = field(default='', metadata={
-        'help': 'the sequence bag being replayed: its stored clock numbers the MOT frames (empty: 1.0 s, 0.5 s)'})
+    sequence_bag: str = field(
+        default='',
+        metadata={
+            'help': 'the sequence bag being replayed: its stored clock numbers the MOT frames (empty: 1.0 s, 0.5 s)'
+        },
+    )
     start_time: float = field(default=math.nan, metadata={'help': 'stamp of frame 0, seconds (NaN: the clock\'s)'})
     frame_period: float = field(default=math.nan, metadata={'help': 'seconds between frames (NaN: the clock\'s)'})
-    flush_period_s: float = field(default=1.0, metadata={
-        'help': 'write what was received to disk every this many (wall) seconds, so a recorder that is killed '
-                'loses at most that much (0: only when closed)'})
-    qos: str = field(default='history', metadata={
-        'help': 'QoS of the subscriptions: history (transient local: also what was published before matching), '
-                'reliable (volatile publishers) or sensor_data'})
+    flush_period_s: float = field(
+        default=1.0,
+        metadata={
+            'help': 'write what was received to disk every this many (wall) seconds, so a recorder that is killed '
+            'loses at most that much (0: only when closed)'
+        },
+    )
+    qos: str = field(
+        default='history',
+        metadata={
+            'help': 'QoS of the subscriptions: history (transient local: also what was published before matching), '
+            'reliable (volatile publishers) or sensor_data'
+        },
+    )
 
     def __post_init__(self):
         if len(self.topics) != len(self.types):
@@ -97,15 +113,20 @@ class Recorder(Node):
         for topic, type_name in zip(s.topics, s.types):
             conn = self.writer.add_connection(topic, type_name, typestore=store)
             self.counts[topic] = 0
-            self.create_subscription(message_class(type_name), topic,
-                                     lambda raw, c=conn, t=topic: self._write(c, t, raw),
-                                     qos_by_name(s.qos, 100), raw=True)
+            self.create_subscription(
+                message_class(type_name),
+                topic,
+                lambda raw, c=conn, t=topic: self._write(c, t, raw),
+                qos_by_name(s.qos, 100),
+                raw=True,
+            )
         self.mot = None
         if s.tracks_topic:
             self.mot = open(s.mot_file or f'{s.out}.tracks.txt', 'w')
-            self.create_subscription(message_class('matrix_msgs/msg/TrackArray'), s.tracks_topic, self._tracks,
-                                     qos_by_name(s.qos, 100))
-        if s.flush_period_s > 0:   # wall time: under use_sim_time the bag's clock may stop or go back
+            self.create_subscription(
+                message_class('matrix_msgs/msg/TrackArray'), s.tracks_topic, self._tracks, qos_by_name(s.qos, 100)
+            )
+        if s.flush_period_s > 0:  # wall time: under use_sim_time the bag's clock may stop or go back
             self.create_timer(s.flush_period_s, self.flush, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(f'recording {len(s.topics)} topics to {s.out}; frames: {self.clock.describe()}')
 

@@ -19,7 +19,9 @@ class DroneRestarts:
 
     def checked(self, view: str, handler):
         """A subscription callback: :meth:`check`, then ``handler(msg)``."""
+
         def callback(msg):
             self.check(view, msg.header)
             handler(msg)
+
         return callback

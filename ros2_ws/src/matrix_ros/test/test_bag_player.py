@@ -22,13 +22,19 @@ pytestmark = pytest.mark.ros
 
 @pytest.fixture(scope='module')
 def sample_bag(matrix_sample, tmp_path_factory):
-    return write_sequence_bag(MatrixDataset(matrix_sample), tmp_path_factory.mktemp('bag') / 'sample',
-                              compressed=True, progress=False)
+    return write_sequence_bag(
+        MatrixDataset(matrix_sample), tmp_path_factory.mktemp('bag') / 'sample', compressed=True, progress=False
+    )
 
 
 def _player(node_executable, bag, *params):
-    return start_node(node_executable('matrix_ros', 'bag_player'), f'bag:={bag}',
-                      'topics:=[/D3/image/compressed,/D3/ground_truth/camera_info]', 'wait_for_subscribers:=1', *params)
+    return start_node(
+        node_executable('matrix_ros', 'bag_player'),
+        f'bag:={bag}',
+        'topics:=[/D3/image/compressed,/D3/ground_truth/camera_info]',
+        'wait_for_subscribers:=1',
+        *params,
+    )
 
 
 def test_replay_is_unchanged_and_publishes_clock(matrix_sample, sample_bag, node_executable):
@@ -41,8 +47,9 @@ def test_replay_is_unchanged_and_publishes_clock(matrix_sample, sample_bag, node
     node.create_subscription(Clock, '/clock', got['clock'].append, 10)
     player = _player(node_executable, sample_bag, 'rate:=20.0')
     deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and (min(len(got['info']), len(got['img']), len(got['clock'])) < 5
-                                           or player.poll() is None):
+    while time.monotonic() < deadline and (
+        min(len(got['info']), len(got['img']), len(got['clock'])) < 5 or player.poll() is None
+    ):
         rclpy.spin_once(node, timeout_sec=0.1)
     out = finish(player, 30)
     node.destroy_node()
@@ -51,8 +58,7 @@ def test_replay_is_unchanged_and_publishes_clock(matrix_sample, sample_bag, node
     assert len(got['img']) == 5 and len(got['info']) == 5, out
     for i, (img, info) in enumerate(zip(got['img'], got['info'])):
         assert stamp_to_seconds(info.header.stamp) == pytest.approx(1.0 + 0.5 * i)
-        np.testing.assert_allclose(camera_info_to_camera(info).cam_T_world, ds.camera('D3', i).cam_T_world,
-                                   atol=1e-9)
+        np.testing.assert_allclose(camera_info_to_camera(info).cam_T_world, ds.camera('D3', i).cam_T_world, atol=1e-9)
         decoded = compressed_to_image(img).astype(float)
         assert np.abs(decoded - ds.load_image('D3', i)).mean() < 3.0  # JPEG of a JPEG
     assert [stamp_to_seconds(c.clock) for c in got['clock']][:5] == pytest.approx([1.0, 1.5, 2.0, 2.5, 3.0])
@@ -62,12 +68,13 @@ def test_replay_is_unchanged_and_publishes_clock(matrix_sample, sample_bag, node
 
 def test_player_reads_the_clock_stored_in_the_bag(matrix_sample, node_executable, tmp_path):
     clock = SequenceClock(start_time=3.0, frame_period=0.25)
-    bag = write_sequence_bag(MatrixDataset(matrix_sample), tmp_path / 'bag', compressed=True, clock=clock,
-                             progress=False)
+    bag = write_sequence_bag(
+        MatrixDataset(matrix_sample), tmp_path / 'bag', compressed=True, clock=clock, progress=False
+    )
     infos = []
     rclpy.init()
     node = rclpy.create_node('bag_clock_test')
-    node.create_subscription(CompressedImage, '/D3/image/compressed', lambda m: None, 10)   # the player waits for it
+    node.create_subscription(CompressedImage, '/D3/image/compressed', lambda m: None, 10)  # the player waits for it
     node.create_subscription(CameraInfo, '/D3/ground_truth/camera_info', infos.append, 10)
     player = _player(node_executable, bag, 'rate:=20.0')
     deadline = time.monotonic() + 60
@@ -87,12 +94,20 @@ def _lockstep_run(node_executable, bag, *params):
     arrivals, acks = [], []
     rclpy.init()
     node = rclpy.create_node('lockstep_test')
-    ack = node.create_publisher(PointStamped, '/ack', publisher_qos())   # as the graph's nodes offer it
+    ack = node.create_publisher(PointStamped, '/ack', publisher_qos())  # as the graph's nodes offer it
     node.create_subscription(CompressedImage, '/D3/image/compressed', lambda m: None, 10)
-    node.create_subscription(CameraInfo, '/D3/ground_truth/camera_info',
-                             lambda m: arrivals.append((time.monotonic(), m.header)), 10)
-    player = _player(node_executable, bag, 'lockstep:=true', 'lockstep_topic:=/ack',
-                     'lockstep_type:=geometry_msgs/msg/PointStamped', 'lockstep_timeout:=20.0', *params)
+    node.create_subscription(
+        CameraInfo, '/D3/ground_truth/camera_info', lambda m: arrivals.append((time.monotonic(), m.header)), 10
+    )
+    player = _player(
+        node_executable,
+        bag,
+        'lockstep:=true',
+        'lockstep_topic:=/ack',
+        'lockstep_type:=geometry_msgs/msg/PointStamped',
+        'lockstep_timeout:=20.0',
+        *params,
+    )
     deadline = time.monotonic() + 90
     while time.monotonic() < deadline and player.poll() is None:
         rclpy.spin_once(node, timeout_sec=0.05)
@@ -118,9 +133,9 @@ def test_lockstep_window_keeps_two_frames_out(sample_bag, node_executable):
     """lockstep_window 2: frame k + 1 leaves before frame k is acknowledged, frame k + 2 only after; the player
     ends only once the last frame is acknowledged."""
     arrivals, acks, exited, out = _lockstep_run(node_executable, sample_bag, 'lockstep_window:=2')
-    assert arrivals[1] - arrivals[0] < 0.5, arrivals - arrivals[0]   # not waiting for frame 0's ack (0.8 s)
+    assert arrivals[1] - arrivals[0] < 0.5, arrivals - arrivals[0]  # not waiting for frame 0's ack (0.8 s)
     assert np.all(arrivals[2:] >= acks[:-2]), (arrivals - arrivals[0], acks - arrivals[0])
-    assert np.all(arrivals[2:] - acks[:-2] < 0.5), (arrivals - arrivals[0], acks - arrivals[0])   # and soon after
+    assert np.all(arrivals[2:] - acks[:-2] < 0.5), (arrivals - arrivals[0], acks - arrivals[0])  # and soon after
     assert exited >= acks[-1], out
 
 
@@ -131,15 +146,26 @@ def test_start_at_releases_frames_together_and_skips_frames_due_before_ready(sam
     rclpy.init()
     node = rclpy.create_node('start_at_test')
     for view, got in arrivals.items():
-        node.create_subscription(CompressedImage, f'/{view}/image/compressed',
-                                 lambda m, got=got: got.append(time.time()), 10)
-    start_at = time.time() + 8.0   # the players are ready well before (a few seconds on a loaded machine)
-    players = [start_node(node_executable('matrix_ros', 'bag_player'), f'bag:={sample_bag}',
-                          f'topics:=[/{view}/image/compressed]', 'wait_for_subscribers:=1', f'start_at:={start_at}')
-               for view in arrivals]
-    late = start_node(node_executable('matrix_ros', 'bag_player'), f'bag:={sample_bag}',
-                      'topics:=[/D1/ground_truth/camera_info]',
-                      f'start_at:={time.time() - 10.0}')   # every frame was due 8-10 s before it is ready
+        node.create_subscription(
+            CompressedImage, f'/{view}/image/compressed', lambda m, got=got: got.append(time.time()), 10
+        )
+    start_at = time.time() + 8.0  # the players are ready well before (a few seconds on a loaded machine)
+    players = [
+        start_node(
+            node_executable('matrix_ros', 'bag_player'),
+            f'bag:={sample_bag}',
+            f'topics:=[/{view}/image/compressed]',
+            'wait_for_subscribers:=1',
+            f'start_at:={start_at}',
+        )
+        for view in arrivals
+    ]
+    late = start_node(
+        node_executable('matrix_ros', 'bag_player'),
+        f'bag:={sample_bag}',
+        'topics:=[/D1/ground_truth/camera_info]',
+        f'start_at:={time.time() - 10.0}',
+    )  # every frame was due 8-10 s before it is ready
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and any(p.poll() is None for p in players):
         rclpy.spin_once(node, timeout_sec=0.02)
@@ -151,8 +177,10 @@ def test_start_at_releases_frames_together_and_skips_frames_due_before_ready(sam
     d3, d5 = np.array(arrivals['D3']), np.array(arrivals['D5'])
     assert len(d3) == len(d5) == 5, outs
     assert d3[0] >= start_at - 0.05 and np.abs(d3 - d5).max() < 0.3, (d3 - start_at, d5 - start_at)
-    assert np.diff(d3) == pytest.approx(0.5, abs=0.2)   # the recorded timing from start_at on
+    assert np.diff(d3) == pytest.approx(0.5, abs=0.2)  # the recorded timing from start_at on
     assert late.returncode == 1 and 'skipped 5 frames due before it was ready' in late_out, late_out
+
+
 def test_a_bag_cut_short_plays_its_frames_before_the_cut_and_says_so(sample_bag, node_executable, tmp_path):
     """A copy of the sample bag cut in its second half (issue 17): the whole frames before the cut are played,
     the player exits with code 4 and says where and why it stopped; no hang."""
@@ -163,8 +191,8 @@ def test_a_bag_cut_short_plays_its_frames_before_the_cut_and_says_so(sample_bag,
     bag = tmp_path / 'cut'
     shutil.copytree(sample_bag, bag)
     f = mcap_file(bag)
-    f.write_bytes(f.read_bytes()[:int(f.stat().st_size * 0.7)])
-    times = []   # of the played topics' messages before the cut: a frame is whole once a later one began
+    f.write_bytes(f.read_bytes()[: int(f.stat().st_size * 0.7)])
+    times = []  # of the played topics' messages before the cut: a frame is whole once a later one began
     with pytest.raises(BagDamaged):
         times.extend(t for _, _, t, _ in raw_messages(bag, {'/D3/image/compressed', '/D3/ground_truth/camera_info'}))
     whole = sorted(set(times))[:-1]
@@ -172,7 +200,7 @@ def test_a_bag_cut_short_plays_its_frames_before_the_cut_and_says_so(sample_bag,
     infos = []
     rclpy.init()
     node = rclpy.create_node('bag_cut_test')
-    node.create_subscription(CompressedImage, '/D3/image/compressed', lambda m: None, 10)   # the player waits for it
+    node.create_subscription(CompressedImage, '/D3/image/compressed', lambda m: None, 10)  # the player waits for it
     node.create_subscription(CameraInfo, '/D3/ground_truth/camera_info', infos.append, 10)
     player = _player(node_executable, bag, 'rate:=20.0')
     deadline = time.monotonic() + 60

@@ -5,9 +5,19 @@ import pytest
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
 from matrix_core.datasets import MatrixDataset
-from matrix_ros.conversions import (ConversionError, camera_info_to_camera, camera_to_camera_info,
-                                    camera_to_pose, compressed_to_image, image_to_compressed, image_to_msg,
-                                    msg_to_image, pose_to_world_T_cam, seconds_to_stamp, stamp_to_seconds)
+from matrix_ros.conversions import (
+    ConversionError,
+    camera_info_to_camera,
+    camera_to_camera_info,
+    camera_to_pose,
+    compressed_to_image,
+    image_to_compressed,
+    image_to_msg,
+    msg_to_image,
+    pose_to_world_T_cam,
+    seconds_to_stamp,
+    stamp_to_seconds,
+)
 
 
 @pytest.fixture(scope='module')
@@ -19,19 +29,27 @@ def test_image_roundtrip_and_encodings(ds):
     img = ds.load_image('D2', 1)
     msg = image_to_msg(img)
     np.testing.assert_array_equal(msg_to_image(msg), img)
-    rgb = Image(height=msg.height, width=msg.width, encoding='rgb8', step=msg.step,
-                data=np.ascontiguousarray(img[:, :, ::-1]).tobytes())
+    rgb = Image(
+        height=msg.height,
+        width=msg.width,
+        encoding='rgb8',
+        step=msg.step,
+        data=np.ascontiguousarray(img[:, :, ::-1]).tobytes(),
+    )
     np.testing.assert_array_equal(msg_to_image(rgb), img)
     grey = image_to_msg(img[:, :, 1])
     assert grey.encoding == 'mono8'
     np.testing.assert_array_equal(msg_to_image(grey)[:, :, 0], img[:, :, 1])
 
 
-@pytest.mark.parametrize('bad, reason', [
-    (Image(height=4, width=4, encoding='16UC1', step=8, data=bytes(32)), 'unsupported image encoding'),
-    (Image(height=0, width=0, encoding='bgr8'), 'empty image'),
-    (Image(height=4, width=4, encoding='bgr8', step=12, data=bytes(10)), 'too short'),
-])
+@pytest.mark.parametrize(
+    'bad, reason',
+    [
+        (Image(height=4, width=4, encoding='16UC1', step=8, data=bytes(32)), 'unsupported image encoding'),
+        (Image(height=0, width=0, encoding='bgr8'), 'empty image'),
+        (Image(height=4, width=4, encoding='bgr8', step=12, data=bytes(10)), 'too short'),
+    ],
+)
 def test_bad_images_raise_clear_errors(bad, reason):
     with pytest.raises(ConversionError, match=reason):
         msg_to_image(bad)
@@ -73,8 +91,7 @@ def test_camera_info_rejects_nan_and_non_rotation(ds):
 def test_pose_is_camera_in_world(ds):
     cam = ds.camera('D7', 2)
     msg = camera_to_pose(cam)
-    np.testing.assert_allclose([msg.pose.position.x, msg.pose.position.y, msg.pose.position.z], cam.center,
-                               atol=1e-9)
+    np.testing.assert_allclose([msg.pose.position.x, msg.pose.position.y, msg.pose.position.z], cam.center, atol=1e-9)
     np.testing.assert_allclose(pose_to_world_T_cam(msg), cam.world_T_cam, atol=1e-9)
 
 

@@ -31,8 +31,14 @@ def _collect(topics_types, until, process, timeout_s=60.0):
 def test_image_and_camera_info_cross_process(matrix_sample, node_executable):
     dataset = MatrixDataset(matrix_sample)
     rclpy.init()
-    player = start_node(node_executable('matrix_ros', 'dataset_player'), f'dataset:={matrix_sample}', 'views:=[D3]',
-                        'max_frames:=2', 'rate:=4.0', 'wait_for_subscribers:=1')
+    player = start_node(
+        node_executable('matrix_ros', 'dataset_player'),
+        f'dataset:={matrix_sample}',
+        'views:=[D3]',
+        'max_frames:=2',
+        'rate:=4.0',
+        'wait_for_subscribers:=1',
+    )
     try:
         topics = [('/D3/image_raw', Image), ('/D3/ground_truth/camera_info', CameraInfo)]
         got = _collect(topics, lambda r: all(len(v) >= 2 for v in r.values()), player)

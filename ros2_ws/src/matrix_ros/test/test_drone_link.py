@@ -23,15 +23,17 @@ def _image(t: float) -> CompressedImage:
     return CompressedImage(header=Header(stamp=seconds_to_stamp(t)), format='jpeg')
 
 
-def _registration(t: float) -> Header:   # the link reads only the header: any stamped message stands in
+def _registration(t: float) -> Header:  # the link reads only the header: any stamped message stands in
     return Header(stamp=seconds_to_stamp(t))
 
 
 def _linked(calls: list) -> DroneLink:
     return DroneLink().connect(
-        lambda view, msg, image, received: calls.append(('image', stamp_to_seconds(msg.header.stamp), received,
-                                                         threading.get_ident())),
-        lambda view, msg: calls.append(('registration', stamp_to_seconds(msg.stamp), None, threading.get_ident())))
+        lambda view, msg, image, received: calls.append(
+            ('image', stamp_to_seconds(msg.header.stamp), received, threading.get_ident())
+        ),
+        lambda view, msg: calls.append(('registration', stamp_to_seconds(msg.stamp), None, threading.get_ident())),
+    )
 
 
 def _drain(node, own):
@@ -57,7 +59,7 @@ def node():
 
 def test_without_a_thread_of_its_own_calls_are_made_at_once(node):
     calls = []
-    assert DroneLink().own_thread(node, 5) is None   # a node alone: no link to hand over on
+    assert DroneLink().own_thread(node, 5) is None  # a node alone: no link to hand over on
     link = _linked(calls)
     assert link.own_thread(node, -1) is None
     link.image('D1', _image(1.0), object())
@@ -76,14 +78,15 @@ def test_calls_wait_in_order_for_calibs_thread_and_the_oldest_images_drop(node):
         handed[k] = time.perf_counter()
         link.image('D1', _image(float(k)), object())
         link.registration('D1', _registration(float(k)))
-    assert calls == [] and own.waiting() == 2 * frames - 2   # nothing made yet; the 2 oldest images dropped
+    assert calls == [] and own.waiting() == 2 * frames - 2  # nothing made yet; the 2 oldest images dropped
     thread = _drain(node, own)
     assert not thread.is_alive() and thread.error is None
     made = [c[:2] for c in calls]
-    assert made == [c for k in range(frames) for c in ([('image', float(k))] if k >= 2 else [])
-                    + [('registration', float(k))]], made
-    assert all(c[3] == thread.ident for c in calls)   # all on calib's own thread
-    for kind, t, received, _ in calls:   # an image's time is when register handed it over
+    assert made == [
+        c for k in range(frames) for c in ([('image', float(k))] if k >= 2 else []) + [('registration', float(k))]
+    ], made
+    assert all(c[3] == thread.ident for c in calls)  # all on calib's own thread
+    for kind, t, received, _ in calls:  # an image's time is when register handed it over
         assert kind == 'registration' or received == pytest.approx(handed[int(t)], abs=0.01)
 
 
@@ -97,9 +100,9 @@ def test_the_limit_of_waiting_images_is_per_drone(node):
     for k in range(MAX_WAITING_IMAGES):
         for view in views:
             link.image(view, _image(float(k)), object())
-    assert own.waiting() == MAX_WAITING_IMAGES * len(views)   # none dropped
+    assert own.waiting() == MAX_WAITING_IMAGES * len(views)  # none dropped
     link.image('D3', _image(99.0), object())
-    assert own.waiting() == MAX_WAITING_IMAGES * len(views)   # D3's oldest made room for its newest
+    assert own.waiting() == MAX_WAITING_IMAGES * len(views)  # D3's oldest made room for its newest
     thread = _drain(node, own)
     made = sorted(c[1] for c in calls)
     assert len(made) == MAX_WAITING_IMAGES * len(views) and made.count(0.0) == len(views) - 1 and 99.0 in made
@@ -112,6 +115,6 @@ def test_the_own_thread_makes_the_calls_still_waiting_when_it_stops(node):
     for k in range(3):
         link.image('D1', _image(float(k)), object())
         link.registration('D1', _registration(float(k)))
-    thread = _spin_in_thread(node, own, [True])   # stopped before it ever ran: the calls are made all the same
+    thread = _spin_in_thread(node, own, [True])  # stopped before it ever ran: the calls are made all the same
     thread.join(20)
     assert len(calls) == 6 and own.waiting() == 0

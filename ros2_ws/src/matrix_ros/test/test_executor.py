@@ -14,7 +14,7 @@ from matrix_ros.qos import publisher_qos, qos_by_name
 
 pytestmark = pytest.mark.ros
 
-TOPICS, MESSAGES = 30, 5   # as many subscriptions as the recorder's per-view topics
+TOPICS, MESSAGES = 30, 5  # as many subscriptions as the recorder's per-view topics
 
 
 @pytest.mark.parametrize('name', ['events', 'single'])
@@ -29,9 +29,12 @@ def test_every_message_of_many_subscriptions_and_the_timer_arrive(monkeypatch, n
         received, ticks = {}, []
         pubs = [node.create_publisher(Header, f'/executor_test_{name}/t{i}', publisher_qos()) for i in range(TOPICS)]
         for i in range(TOPICS):
-            node.create_subscription(Header, f'/executor_test_{name}/t{i}',
-                                     lambda m, i=i: received.setdefault(i, []).append(m.frame_id),
-                                     qos_by_name('history', depth=MESSAGES))
+            node.create_subscription(
+                Header,
+                f'/executor_test_{name}/t{i}',
+                lambda m, i=i: received.setdefault(i, []).append(m.frame_id),
+                qos_by_name('history', depth=MESSAGES),
+            )
         node.create_timer(0.05, lambda: ticks.append(time.monotonic()))
         end = time.monotonic() + 10
         while any(p.get_subscription_count() == 0 for p in pubs) and time.monotonic() < end:

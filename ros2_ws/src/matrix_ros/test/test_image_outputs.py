@@ -29,8 +29,10 @@ def test_camera_info_and_registration_give_the_same_boxes(ds, matrix_sample):
     cam = ds.camera('D2', 1)
     people = ds.annotations(1)
     tracks = [SimpleNamespace(track_id=p.person_id, score=0.9, xy=p.world_xy, detection_xy=None) for p in people]
-    geometry = {'info': camera_to_camera_info(cam),
-                'registration': registration_to_msg(Registration.from_img_H_ground(cam.img_H_ground()))}
+    geometry = {
+        'info': camera_to_camera_info(cam),
+        'registration': registration_to_msg(Registration.from_img_H_ground(cam.img_H_ground())),
+    }
     from_info = cameras.frame_boxes({'D2': geometry['info']}, tracks)['D2']
     from_registration = cameras.frame_boxes({'D2': geometry['registration']}, tracks)['D2']
     assert [b.track_id for b in from_info] == [b.track_id for b in from_registration]
@@ -39,7 +41,7 @@ def test_camera_info_and_registration_give_the_same_boxes(ds, matrix_sample):
     annotated = {p.person_id: p.boxes['D2'] for p in people if 'D2' in p.boxes}
     found = {b.track_id for b in from_info}
     assert len(found & set(annotated)) >= 0.9 * len(annotated)
-    assert cameras.frame_boxes({'D2': None}, tracks) == {}                          # no geometry, no boxes
+    assert cameras.frame_boxes({'D2': None}, tracks) == {}  # no geometry, no boxes
     assert ViewCameras(ImageBoxSettings()).frame_boxes({'D2': geometry['registration']}, tracks) == {}  # no K
     failed = registration_to_msg(Registration.failed('too few inliers'))
     assert cameras.frame_boxes({'D2': failed}, tracks) == {}
@@ -47,16 +49,17 @@ def test_camera_info_and_registration_give_the_same_boxes(ds, matrix_sample):
 
 def test_detections_2d_message_round_trip_and_overlay(ds, matrix_sample):
     cameras = ViewCameras.from_dataset(ImageBoxSettings(), matrix_sample, ['D1'])
-    tracks = [SimpleNamespace(track_id=p.person_id, score=0.5, xy=np.zeros(2), detection_xy=p.world_xy)
-              for p in ds.annotations(0)]
+    tracks = [
+        SimpleNamespace(track_id=p.person_id, score=0.5, xy=np.zeros(2), detection_xy=p.world_xy)
+        for p in ds.annotations(0)
+    ]
     boxes = cameras.frame_boxes({'D1': camera_to_camera_info(ds.camera('D1', 0))}, tracks)['D1']
     header = Header(frame_id=topics.optical_frame('D1'))
     header.stamp.sec = 3
     msg = deserialize_message(serialize_message(out.detections_2d_msg(header, boxes)), Detection2DArray)
     assert msg.header.frame_id == 'D1/camera_optical' and msg.header.stamp.sec == 3
     assert [d.id for d in msg.detections] == [b.track_id for b in boxes]
-    np.testing.assert_allclose([[d.x_min, d.y_min, d.x_max, d.y_max] for d in msg.detections],
-                               [b.box for b in boxes])
+    np.testing.assert_allclose([[d.x_min, d.y_min, d.x_max, d.y_max] for d in msg.detections], [b.box for b in boxes])
     assert [d.distance_m for d in msg.detections] == sorted(d.distance_m for d in msg.detections)
     assert all(d.score == 0.5 for d in msg.detections)
     overlay = out.overlay_msg(header, ds.load_image('D1', 0), boxes)

@@ -25,9 +25,9 @@ from matrix_ros.qos import publisher_qos, qos_by_name
 from ros_helpers import finish, spin_for, spin_until, start_node, stop, wait_matched
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
-FRAME = bytes(range(256)) * 800   # 200 kB
-LINK_MBIT = 1.6                   # a frame takes the link 1.04 s
-PERIOD_S = 0.25                   # the camera: 4 frames/s, 6.4 Mbit/s
+FRAME = bytes(range(256)) * 800  # 200 kB
+LINK_MBIT = 1.6  # a frame takes the link 1.04 s
+PERIOD_S = 0.25  # the camera: 4 frames/s, 6.4 Mbit/s
 
 
 def test_frames_cross_as_fast_as_the_link_budget_lets_them(node_executable, tmp_path):
@@ -37,10 +37,14 @@ def test_frames_cross_as_fast_as_the_link_budget_lets_them(node_executable, tmp_
     with open(probe_log, 'w') as log:
         log.write('link_probe --link D1\n')
         log.flush()
-        reader = subprocess.Popen([sys.executable, '-m', 'matrix_bringup.link_probe', '--link', 'D1'], stdout=log,
-                                  stderr=subprocess.STDOUT, text=True)
+        reader = subprocess.Popen(
+            [sys.executable, '-m', 'matrix_bringup.link_probe', '--link', 'D1'],
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
     node = Node('link_sender_test')
-    said = {}   # stamp -> link_sender's status values
+    said = {}  # stamp -> link_sender's status values
 
     def on_diagnostics(msg):
         for s in msg.status:
@@ -48,12 +52,13 @@ def test_frames_cross_as_fast_as_the_link_budget_lets_them(node_executable, tmp_
                 said[_rounded(msg.header.stamp)] = {kv.key: kv.value for kv in s.values}
 
     diag = node.create_subscription(DiagnosticArray, '/diagnostics', on_diagnostics, qos_by_name('history', 100))
-    notices = []   # stamps of link_sender's notices of frames not sent
-    dropped_sub = node.create_subscription(Header, '/D1/link/dropped', lambda m: notices.append(_rounded(m.stamp)),
-                                           qos_by_name('reliable', 100))
+    notices = []  # stamps of link_sender's notices of frames not sent
+    dropped_sub = node.create_subscription(
+        Header, '/D1/link/dropped', lambda m: notices.append(_rounded(m.stamp)), qos_by_name('reliable', 100)
+    )
     camera = node.create_publisher(CompressedImage, '/D1/image/compressed', publisher_qos())
     stamps = iter(round(1.0 + 0.5 * k, 3) for k in range(1000))
-    published_at = {}   # stamp -> monotonic s
+    published_at = {}  # stamp -> monotonic s
     received = lambda: {round(line['stamp'], 3) for line in read_probe(probe_log) if line['kind'] == 'image'}  # noqa
 
     def play(count):
@@ -62,8 +67,13 @@ def test_frames_cross_as_fast_as_the_link_budget_lets_them(node_executable, tmp_
         for _ in range(count):
             played.append(next(stamps))
             published_at[played[-1]] = time.monotonic()
-            camera.publish(CompressedImage(format='jpeg', data=FRAME, header=Header(
-                stamp=seconds_to_stamp(played[-1]), frame_id='D1/camera_optical')))
+            camera.publish(
+                CompressedImage(
+                    format='jpeg',
+                    data=FRAME,
+                    header=Header(stamp=seconds_to_stamp(played[-1]), frame_id='D1/camera_optical'),
+                )
+            )
             spin_for(node, PERIOD_S)
         spin_until(node, lambda: all(s in said for s in played), [sender], 10.0)
         return played
@@ -74,12 +84,19 @@ def test_frames_cross_as_fast_as_the_link_budget_lets_them(node_executable, tmp_
         warm_up = []
         while not received() and len(warm_up) < 30 and sender.poll() is None:
             warm_up += play(1)
-            spin_for(node, 2.0 - PERIOD_S)   # the link free again
+            spin_for(node, 2.0 - PERIOD_S)  # the link free again
         assert received(), f'the reader never got a frame: {said}'
         spin_for(node, 1.5)
         played = play(16)
-        spin_until(node, lambda: received() >= {s for s in played if said[s]['outcome'] == 'sent'}
-                   and len(notices) >= sum(said[s]['outcome'] == 'dropped' for s in played), [sender], 10.0)
+        spin_until(
+            node,
+            lambda: (
+                received() >= {s for s in played if said[s]['outcome'] == 'sent'}
+                and len(notices) >= sum(said[s]['outcome'] == 'dropped' for s in played)
+            ),
+            [sender],
+            10.0,
+        )
     finally:
         out = stop(sender)
         reader.send_signal(signal.SIGINT)
@@ -99,7 +116,7 @@ def test_frames_cross_as_fast_as_the_link_budget_lets_them(node_executable, tmp_
     assert all(dt > transfer - 0.1 for o, dt in since_sent[1:] if o == 'sent'), since_sent
     assert all(dt < transfer + 0.1 for o, dt in since_sent if o == 'dropped'), since_sent
     assert float(said[played[1]]['link_busy_s']) == pytest.approx(transfer - PERIOD_S, abs=0.2)
-    assert int(said[played[-1]]['dropped']) == len(played) - len(sent)   # the warm-up's frames all left
+    assert int(said[played[-1]]['dropped']) == len(played) - len(sent)  # the warm-up's frames all left
     # what crossed is what link_sender said it sent, whole: never a dropped frame
     got = received()
     assert set(sent) <= got and not {s for s in played if s not in sent} & got, (got, outcomes)

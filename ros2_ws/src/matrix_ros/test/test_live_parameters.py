@@ -51,8 +51,11 @@ def test_an_unknown_parameter_is_an_error_naming_it_and_the_valid_ones():
     rclpy.init(args=['test', '--ros-args', '-p', 'gap_z:=1.0', '-p', 'use_sim_time:=true'])
     node = Node('unknown_parameter_test')
     try:
-        with pytest.raises(ValueError, match=r"unknown parameter\(s\) 'gap_z' \(did you mean 'gap_s'\?\); its "
-                                             r"parameters are: .*gap_s.*use_sim_time, views"):
+        with pytest.raises(
+            ValueError,
+            match=r"unknown parameter\(s\) 'gap_z' \(did you mean 'gap_s'\?\); its "
+            r"parameters are: .*gap_s.*use_sim_time, views",
+        ):
             declare_settings(node, _Settings)
     finally:
         node.destroy_node()
@@ -63,9 +66,21 @@ def test_a_node_given_an_unknown_parameter_does_not_start(node_executable, tmp_p
     """The same from the command line of a real node (the recorder starts in about a second)."""
     import subprocess
 
-    run = subprocess.run([str(node_executable('matrix_ros', 'recorder')), '--ros-args', '-p', f'out:={tmp_path / "r"}',
-                          '-p', 'flush_period:=0.5'], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                         timeout=60)
-    assert run.returncode != 0 and "unknown parameter(s) 'flush_period' (did you mean 'flush_period_s'?)" \
-        in run.stdout, run.stdout[-2000:]
+    run = subprocess.run(
+        [
+            str(node_executable('matrix_ros', 'recorder')),
+            '--ros-args',
+            '-p',
+            f'out:={tmp_path / "r"}',
+            '-p',
+            'flush_period:=0.5',
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        timeout=60,
+    )
+    assert (
+        run.returncode != 0 and "unknown parameter(s) 'flush_period' (did you mean 'flush_period_s'?)" in run.stdout
+    ), run.stdout[-2000:]
     assert not (tmp_path / 'r').exists()

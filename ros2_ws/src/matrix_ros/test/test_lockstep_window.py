@@ -20,9 +20,9 @@ class Graph:
             pending = [s for s in self.sent if s not in self.window.released]
             ready = [s for s in pending if s not in self.stuck]
             if not ready:
-                return   # nothing the graph could finish: the wait times out
+                return  # nothing the graph could finish: the wait times out
             self.window.on_message(Header(stamp=seconds_to_stamp(ready[0])))
-            self.log.append((ready[0], len(pending)))   # the frame, and how many were out until then
+            self.log.append((ready[0], len(pending)))  # the frame, and how many were out until then
 
 
 def _window(size, graph):
@@ -34,7 +34,7 @@ def _window(size, graph):
 
 def _play(window, graph, stamps):
     for stamp in stamps:
-        graph.sent.append(stamp)   # published: the graph may now finish it
+        graph.sent.append(stamp)  # published: the graph may now finish it
         window.sent(stamp, f'frame at {stamp}')
     window.finish()
 
@@ -55,13 +55,13 @@ def test_a_frame_never_released_times_out_and_the_rest_go_on():
     _play(window, graph, [1.0, 1.5, 2.0])
     assert window.timed_out == [1.5] and len(warnings) == 1 and 'frame at 1.5' in warnings[0]
     assert [s for s, _ in graph.log] == [1.0, 2.0] and not window.out
-    assert warnings[0].startswith('lockstep: only 0/1 messages')   # what bench_graph.py looks for in the log
+    assert warnings[0].startswith('lockstep: only 0/1 messages')  # what bench_graph.py looks for in the log
 
 
 def test_stamped_messages_release_their_frame():
     window, _ = _window(1, Graph())
     window.on_message(Header(stamp=seconds_to_stamp(2.5)))
-    window.on_message(Header(stamp=seconds_to_stamp(2.5000001)))   # the same frame (rounded to 1 us)
+    window.on_message(Header(stamp=seconds_to_stamp(2.5000001)))  # the same frame (rounded to 1 us)
     assert window.released == {2.5: 2}
     with pytest.raises(ValueError, match='window'):
         LockstepWindow(0, 1, 5.0, None, print)

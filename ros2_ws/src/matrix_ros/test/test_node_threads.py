@@ -9,7 +9,7 @@ from matrix_ros.node_settings import NodeSettings
 
 
 def test_apply_threads_limits_opencv_and_blas():
-    with threadpool_limits(limits=None):   # restores this test process's pools afterwards
+    with threadpool_limits(limits=None):  # restores this test process's pools afterwards
         before = cv2.getNumThreads()
         try:
             NodeSettings(threads=1).apply_threads()

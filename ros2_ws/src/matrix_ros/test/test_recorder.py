@@ -27,9 +27,14 @@ def test_records_standard_and_custom_messages(matrix_sample, node_executable, tm
     out = tmp_path / 'rec'
 
     def start_recorder():
-        return start_node(node_executable('matrix_ros', 'recorder'), f'out:={out}',
-                          'topics:=[/D2/camera_info,/tracks]',
-                          'types:=[sensor_msgs/msg/CameraInfo,matrix_msgs/msg/TrackArray]', 'tracks_topic:=/tracks')
+        return start_node(
+            node_executable('matrix_ros', 'recorder'),
+            f'out:={out}',
+            'topics:=[/D2/camera_info,/tracks]',
+            'types:=[sensor_msgs/msg/CameraInfo,matrix_msgs/msg/TrackArray]',
+            'tracks_topic:=/tracks',
+        )
+
     procs = []
     try:
         _exercise(start_recorder, procs, ds)
@@ -40,11 +45,13 @@ def test_records_standard_and_custom_messages(matrix_sample, node_executable, tm
                 rec.communicate()
     lines = (tmp_path / 'rec.tracks.txt').read_text().split('\n')
     assert lines[:4] == ['0 7 1.0000 -2.0000', '0 9 5.0000 -6.5000', '1 7 2.0000 -2.0000', '1 9 5.0000 -7.5000']
-    assert bag_topics(out) == {'/D2/camera_info': ('sensor_msgs/msg/CameraInfo', 3),
-                               '/tracks': ('matrix_msgs/msg/TrackArray', 3)}
+    assert bag_topics(out) == {
+        '/D2/camera_info': ('sensor_msgs/msg/CameraInfo', 3),
+        '/tracks': ('matrix_msgs/msg/TrackArray', 3),
+    }
     infos = [m.msg for m in read_bag(out, ['/D2/camera_info'])]
     assert list(infos[2].p) == pytest.approx(list(camera_to_camera_info(ds.camera('D2', 2)).p))
-    assert read_sequence_clock(out) == SequenceClock()   # the clock that numbered the MOT frames, stored
+    assert read_sequence_clock(out) == SequenceClock()  # the clock that numbered the MOT frames, stored
 
 
 def _exercise(start_recorder, procs, ds):
@@ -59,14 +66,22 @@ def _exercise(start_recorder, procs, ds):
         def publish(i):
             header = Header(stamp=seconds_to_stamp(1.0 + 0.5 * i), frame_id='world')
             info_pub.publish(camera_to_camera_info(ds.camera('D2', i), header))
-            track_pub.publish(TrackArray(header=header, tracks=[
-                Track(id=7, position=Point(x=1.0 + i, y=-2.0)), Track(id=9, position=Point(x=5.0, y=-6.5 - i))]))
+            track_pub.publish(
+                TrackArray(
+                    header=header,
+                    tracks=[
+                        Track(id=7, position=Point(x=1.0 + i, y=-2.0)),
+                        Track(id=9, position=Point(x=5.0, y=-6.5 - i)),
+                    ],
+                )
+            )
+
         publish(0)
-        publish(1)   # before the recorder exists
+        publish(1)  # before the recorder exists
         procs.append(rec := start_recorder())
         wait_matched(node, [info_pub], [rec], 60)
-        wait_matched(node, [track_pub], [rec], 60, count=2)   # the bag's subscription and the MOT text's
-        publish(2)   # no wait for the recorder's side of the matching: history covers it
+        wait_matched(node, [track_pub], [rec], 60, count=2)  # the bag's subscription and the MOT text's
+        publish(2)  # no wait for the recorder's side of the matching: history covers it
         for pub in (info_pub, track_pub):
             pub.wait_for_all_acked(rclpy.duration.Duration(seconds=5))
         # Acknowledged is received, not yet written, and the bag's writes cannot be seen from outside (it
@@ -110,9 +125,14 @@ def test_a_killed_recorder_keeps_what_it_flushed(matrix_sample, node_executable,
     try:
         info_pub = node.create_publisher(CameraInfo, '/D2/camera_info', publisher_qos())
         track_pub = node.create_publisher(TrackArray, '/tracks', publisher_qos())
-        rec = start_node(node_executable('matrix_ros', 'recorder'), f'out:={out}', 'flush_period_s:=0.2',
-                         'topics:=[/D2/camera_info,/tracks]', 'tracks_topic:=/tracks',
-                         'types:=[sensor_msgs/msg/CameraInfo,matrix_msgs/msg/TrackArray]')
+        rec = start_node(
+            node_executable('matrix_ros', 'recorder'),
+            f'out:={out}',
+            'flush_period_s:=0.2',
+            'topics:=[/D2/camera_info,/tracks]',
+            'tracks_topic:=/tracks',
+            'types:=[sensor_msgs/msg/CameraInfo,matrix_msgs/msg/TrackArray]',
+        )
         wait_matched(node, [info_pub], [rec], 60)
         wait_matched(node, [track_pub], [rec], 60, count=2)
         for i in range(3):
@@ -121,7 +141,7 @@ def test_a_killed_recorder_keeps_what_it_flushed(matrix_sample, node_executable,
             track_pub.publish(TrackArray(header=header, tracks=[Track(id=7, position=Point(x=1.0 + i, y=-2.0))]))
         for pub in (info_pub, track_pub):
             pub.wait_for_all_acked(rclpy.duration.Duration(seconds=5))
-        time.sleep(1.5)   # received is not yet flushed: several flush periods
+        time.sleep(1.5)  # received is not yet flushed: several flush periods
         rec.kill()
         rec.communicate(timeout=30)
     finally:
@@ -138,5 +158,8 @@ def test_a_killed_recorder_keeps_what_it_flushed(matrix_sample, node_executable,
     with pytest.raises(BagDamaged, match=' 3 messages before the damage'):
         infos.extend(m.msg for m in read_bag(out, ['/D2/camera_info']))
     assert list(infos[2].p) == pytest.approx(list(camera_to_camera_info(ds.camera('D2', 2)).p))
-    assert (tmp_path / 'rec.tracks.txt').read_text().split('\n')[:3] == \
-        ['0 7 1.0000 -2.0000', '1 7 2.0000 -2.0000', '2 7 3.0000 -2.0000']
+    assert (tmp_path / 'rec.tracks.txt').read_text().split('\n')[:3] == [
+        '0 7 1.0000 -2.0000',
+        '1 7 2.0000 -2.0000',
+        '2 7 3.0000 -2.0000',
+    ]

@@ -31,13 +31,13 @@ def test_ready_only_after_the_subscriptions_stayed_matched_for_the_settle_time()
         sub = node.create_subscription(Header, '/subscribers_ready_test/a', lambda m: None, 10)
         _spin_until(node, lambda: pub.get_subscription_count() == 1)
         assert ready.short() == {}
-        assert not ready.ready(10.0)          # matched just now: the settle time starts
+        assert not ready.ready(10.0)  # matched just now: the settle time starts
         assert not ready.ready(10.4)
         assert ready.ready(10.5)
-        node.destroy_subscription(sub)        # a subscription gone restarts the wait
+        node.destroy_subscription(sub)  # a subscription gone restarts the wait
         _spin_until(node, lambda: pub.get_subscription_count() == 0)
         assert not ready.ready(11.0)
-        assert SubscribersReady({'a': pub}, need=0).ready(0.0)   # nothing awaited: ready at once
+        assert SubscribersReady({'a': pub}, need=0).ready(0.0)  # nothing awaited: ready at once
         node.destroy_node()
     finally:
         rclpy.shutdown()

@@ -20,10 +20,19 @@ import importlib
 
 # Names are imported on first use: the clock (read by settings dataclasses, so by every CLI start) must not
 # pull in rosbags and the message code.
-_MODULE_OF = {'SequenceClock': 'clock', 'DEFAULT_CLOCK': 'clock', 'read_sequence_clock': 'clock',
-              'BagMessage': 'reader', 'bag_topics': 'reader', 'read_bag': 'reader', 'read_sequence_frames': 'reader',
-              'SequenceBagWriter': 'writer', 'write_sequence_bag': 'writer', 'BagDamaged': 'salvage',
-              'raw_messages': 'salvage'}
+_MODULE_OF = {
+    'SequenceClock': 'clock',
+    'DEFAULT_CLOCK': 'clock',
+    'read_sequence_clock': 'clock',
+    'BagMessage': 'reader',
+    'bag_topics': 'reader',
+    'read_bag': 'reader',
+    'read_sequence_frames': 'reader',
+    'SequenceBagWriter': 'writer',
+    'write_sequence_bag': 'writer',
+    'BagDamaged': 'salvage',
+    'raw_messages': 'salvage',
+}
 
 __all__ = sorted(_MODULE_OF)
 

@@ -56,8 +56,11 @@ class SequenceClock:
 
     def overridden(self, start_time: float = None, frame_period: float = None) -> 'SequenceClock':
         """This clock with the values that are given (not None, not NaN) replaced."""
-        given = {k: float(v) for k, v in (('start_time', start_time), ('frame_period', frame_period))
-                 if v is not None and not math.isnan(v)}
+        given = {
+            k: float(v)
+            for k, v in (('start_time', start_time), ('frame_period', frame_period))
+            if v is not None and not math.isnan(v)
+        }
         return replace(self, **given)
 
     def custom_data(self) -> dict:
@@ -95,6 +98,7 @@ def read_sequence_clock(bag_path, note=None) -> SequenceClock:
     clock = stored_sequence_clock(bag_path)
     if clock is None:
         clock = DEFAULT_CLOCK
-        (note or _log.warning)(f'{bag_path} stores no sequence clock (written before it was stored): '
-                               f'assuming {clock.describe()}')
+        (note or _log.warning)(
+            f'{bag_path} stores no sequence clock (written before it was stored): assuming {clock.describe()}'
+        )
     return clock

@@ -12,12 +12,16 @@ from matrix_core.geometry.camera import Camera, pose_matrix
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 _T = TYPESTORE.types
-stamp_ns = fields.stamp_ns   # Header -> integer nanoseconds
+stamp_ns = fields.stamp_ns  # Header -> integer nanoseconds
 
 
 def header(stamp_ns: int, frame_id: str):
-    return _T['std_msgs/msg/Header'](stamp=_T['builtin_interfaces/msg/Time'](
-        sec=int(stamp_ns // 1_000_000_000), nanosec=int(stamp_ns % 1_000_000_000)), frame_id=frame_id)
+    return _T['std_msgs/msg/Header'](
+        stamp=_T['builtin_interfaces/msg/Time'](
+            sec=int(stamp_ns // 1_000_000_000), nanosec=int(stamp_ns % 1_000_000_000)
+        ),
+        frame_id=frame_id,
+    )
 
 
 def image_msg(image: np.ndarray, hdr):
@@ -30,11 +34,12 @@ def image_msg(image: np.ndarray, hdr):
 
 def compressed_msg(image: np.ndarray, hdr, quality: int = 95):
     f = fields.compressed_fields(image, 'jpeg', quality)
-    return _T['sensor_msgs/msg/CompressedImage'](header=hdr, format=f['format'],
-                                                 data=np.frombuffer(f['data'], np.uint8))
+    return _T['sensor_msgs/msg/CompressedImage'](
+        header=hdr, format=f['format'], data=np.frombuffer(f['data'], np.uint8)
+    )
 
 
-msg_to_image = fields.image_from_msg            # Image (bgr8, rgb8, mono8, ...) or CompressedImage -> BGR
+msg_to_image = fields.image_from_msg  # Image (bgr8, rgb8, mono8, ...) or CompressedImage -> BGR
 camera_info_to_camera = fields.camera_from_camera_info
 
 
@@ -42,15 +47,23 @@ def camera_info_msg(camera: Camera, hdr):
     """Camera -> CameraInfo with p = K [R | t] (world -> pixels)."""
     f = fields.camera_info_fields(camera)
     return _T['sensor_msgs/msg/CameraInfo'](
-        header=hdr, height=f['height'], width=f['width'], distortion_model=f['distortion_model'],
-        **{k: np.asarray(f[k], dtype=np.float64) for k in ('d', 'k', 'r', 'p')}, binning_x=0, binning_y=0,
-        roi=_T['sensor_msgs/msg/RegionOfInterest'](x_offset=0, y_offset=0, height=0, width=0, do_rectify=False))
+        header=hdr,
+        height=f['height'],
+        width=f['width'],
+        distortion_model=f['distortion_model'],
+        **{k: np.asarray(f[k], dtype=np.float64) for k in ('d', 'k', 'r', 'p')},
+        binning_x=0,
+        binning_y=0,
+        roi=_T['sensor_msgs/msg/RegionOfInterest'](x_offset=0, y_offset=0, height=0, width=0, do_rectify=False),
+    )
 
 
 def _pose(T: np.ndarray):
     (px, py, pz), (x, y, z, w) = fields.pose_values(T)
-    return _T['geometry_msgs/msg/Pose'](position=_T['geometry_msgs/msg/Point'](x=px, y=py, z=pz),
-                                        orientation=_T['geometry_msgs/msg/Quaternion'](x=x, y=y, z=z, w=w))
+    return _T['geometry_msgs/msg/Pose'](
+        position=_T['geometry_msgs/msg/Point'](x=px, y=py, z=pz),
+        orientation=_T['geometry_msgs/msg/Quaternion'](x=x, y=y, z=z, w=w),
+    )
 
 
 def pose_msg(camera: Camera, hdr):
@@ -58,7 +71,7 @@ def pose_msg(camera: Camera, hdr):
     return _T['geometry_msgs/msg/PoseStamped'](header=hdr, pose=_pose(camera.world_T_cam))
 
 
-pose_to_matrix = fields.pose_matrix_from_msg   # geometry_msgs/Pose -> (4, 4)
+pose_to_matrix = fields.pose_matrix_from_msg  # geometry_msgs/Pose -> (4, 4)
 
 
 def pedestrians_msg(positions: dict, hdr):
@@ -66,5 +79,7 @@ def pedestrians_msg(positions: dict, hdr):
     ids = sorted(positions)
     poses = [_pose(pose_matrix(np.eye(3), np.asarray(positions[i], dtype=float))) for i in ids]
     layout = _T['std_msgs/msg/MultiArrayLayout'](dim=[], data_offset=0)
-    return (_T['geometry_msgs/msg/PoseArray'](header=hdr, poses=poses),
-            _T['std_msgs/msg/Int32MultiArray'](layout=layout, data=np.array(ids, dtype=np.int32)))
+    return (
+        _T['geometry_msgs/msg/PoseArray'](header=hdr, poses=poses),
+        _T['std_msgs/msg/Int32MultiArray'](layout=layout, data=np.array(ids, dtype=np.int32)),
+    )

@@ -28,8 +28,7 @@ def mcap_file(bag) -> Path:
         return bag
     found = sorted(bag.glob('*.mcap')) if bag.is_dir() else []
     if len(found) != 1:
-        raise BagDamaged(f'{bag}: not a readable rosbag2 folder and no single .mcap file in it '
-                         f'({len(found)} found)')
+        raise BagDamaged(f'{bag}: not a readable rosbag2 folder and no single .mcap file in it ({len(found)} found)')
     return found[0]
 
 
@@ -119,8 +118,11 @@ def _stream(bag, topics, why: str, channels_only: dict = None):
                     yield topic, msgtype, record.log_time, bytes(record.data)
                     count += 1
     except Exception as exc:  # EndOfFile (cut short), InvalidMagic, a record that does not parse
-        raise BagDamaged(f'{bag} cannot be opened as a whole bag ({why}); read from {path.name} record by record: '
-                         f'{count} messages before the damage ({type(exc).__name__}: {exc or "end of file"})') \
-            from None
-    raise BagDamaged(f'{bag} cannot be opened as a whole bag ({why}); read from {path.name} record by record: '
-                     f'all {count} messages (its records are intact)')
+        raise BagDamaged(
+            f'{bag} cannot be opened as a whole bag ({why}); read from {path.name} record by record: '
+            f'{count} messages before the damage ({type(exc).__name__}: {exc or "end of file"})'
+        ) from None
+    raise BagDamaged(
+        f'{bag} cannot be opened as a whole bag ({why}); read from {path.name} record by record: '
+        f'all {count} messages (its records are intact)'
+    )

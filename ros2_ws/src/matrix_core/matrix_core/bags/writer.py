@@ -73,8 +73,9 @@ class SequenceBagWriter:
         self._writer.close()
 
 
-def write_sequence_bag(dataset, path, compressed: bool = False, clock: SequenceClock = None,
-                       progress: bool = True) -> Path:
+def write_sequence_bag(
+    dataset, path, compressed: bool = False, clock: SequenceClock = None, progress: bool = True
+) -> Path:
     """Write any MATRIX-format dataset (simulated or the real sample) as a sequence bag at ``path``.
 
     Args:

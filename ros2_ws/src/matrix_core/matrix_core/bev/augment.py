@@ -24,22 +24,22 @@ class AugmentConfig:
 
     enabled: bool = False
     p_photometric: float = 0.8
-    brightness: float = 0.3         # multiplicative factor in [1 - b, 1 + b]
-    contrast: float = 0.3           # around the image's mean grey, factor in [1 - c, 1 + c]
-    saturation: float = 0.4         # factor in [1 - s, 1 + s]
-    hue_deg: float = 10.0           # hue shift in [-hue, +hue] degrees
-    gamma: float = 0.3              # exponent in [1 / (1 + g), 1 + g] (log-uniform)
-    channel_gain: float = 0.1       # each of R, G, B scaled by [1 - g, 1 + g] (white balance)
+    brightness: float = 0.3  # multiplicative factor in [1 - b, 1 + b]
+    contrast: float = 0.3  # around the image's mean grey, factor in [1 - c, 1 + c]
+    saturation: float = 0.4  # factor in [1 - s, 1 + s]
+    hue_deg: float = 10.0  # hue shift in [-hue, +hue] degrees
+    gamma: float = 0.3  # exponent in [1 / (1 + g), 1 + g] (log-uniform)
+    channel_gain: float = 0.1  # each of R, G, B scaled by [1 - g, 1 + g] (white balance)
     p_greyscale: float = 0.05
     p_blur: float = 0.3
-    blur_sigma: list = field(default_factory=lambda: [0.3, 1.5])      # input pixels
+    blur_sigma: list = field(default_factory=lambda: [0.3, 1.5])  # input pixels
     p_noise: float = 0.3
-    noise_std: list = field(default_factory=lambda: [1.0, 8.0])       # grey levels (0..255)
+    noise_std: list = field(default_factory=lambda: [1.0, 8.0])  # grey levels (0..255)
     p_jpeg: float = 0.3
     jpeg_quality: list = field(default_factory=lambda: [30, 90])
     p_scale_crop: float = 0.5
-    zoom: list = field(default_factory=lambda: [0.8, 1.25])           # > 1 magnifies
-    shift: float = 0.1              # translation up to this fraction of the image width/height
+    zoom: list = field(default_factory=lambda: [0.8, 1.25])  # > 1 magnifies
+    shift: float = 0.1  # translation up to this fraction of the image width/height
 
     def __post_init__(self):
         probs = {k: v for k, v in vars(self).items() if k.startswith('p_')}
@@ -71,12 +71,12 @@ def photometric(rgb: np.ndarray, config: AugmentConfig, rng: np.random.Generator
     g = np.exp(rng.uniform(-1.0, 1.0) * np.log1p(config.gamma))
     gains = np.array([_around_one(rng, config.channel_gain) for _ in range(3)]) * _around_one(rng, config.brightness)
     levels = np.arange(256.0)[:, None] / 255.0
-    curve = levels ** g * gains                                              # (256, 3)
+    curve = levels**g * gains  # (256, 3)
     # contrast pivots on the mean grey, taken through the curve at the mean of each channel (cheap, close)
     mean = float(np.mean(curve[np.round(cv2.mean(rgb)[:3]).astype(int), range(3)]))
     curve = (curve - mean) * _around_one(rng, config.contrast) + mean
     out = cv2.LUT(rgb, _to_lut(curve * 255.0))
-    hsv = cv2.cvtColor(out, cv2.COLOR_RGB2HSV)      # uint8: H in [0, 180), S and V in [0, 255]
+    hsv = cv2.cvtColor(out, cv2.COLOR_RGB2HSV)  # uint8: H in [0, 180), S and V in [0, 255]
     shift = rng.uniform(-config.hue_deg, config.hue_deg) / 2.0
     hue = (np.arange(256) + int(round(shift))) % 180
     sat = np.arange(256) * _around_one(rng, config.saturation)
@@ -102,10 +102,10 @@ def gaussian_noise(rgb: np.ndarray, std: float, rng: np.random.Generator) -> np.
     OpenCV's generator is 3x faster than numpy's here; seeding it from ``rng`` right before the draw keeps
     the result a function of ``rng`` alone (OpenCV's generator is per thread).
     """
-    cv2.setRNGSeed(int(rng.integers(2 ** 31)))
+    cv2.setRNGSeed(int(rng.integers(2**31)))
     noise = np.empty(rgb.shape, np.float32)
     cv2.randn(noise, 0.0, (float(std),) * 3)
-    return cv2.add(rgb, noise, dtype=cv2.CV_8U)     # rounds and saturates
+    return cv2.add(rgb, noise, dtype=cv2.CV_8U)  # rounds and saturates
 
 
 def jpeg_round_trip(rgb: np.ndarray, quality: int) -> np.ndarray:
@@ -125,18 +125,24 @@ def scale_crop_affine(size: tuple, zoom: float, shift_px: tuple) -> np.ndarray:
         shift_px: (dx, dy) pixels.
     """
     w, h = size
-    cx, cy = (w - 1) / 2.0, (h - 1) / 2.0      # the centre in the pixel-centre convention
-    return np.array([[zoom, 0.0, cx + shift_px[0] - zoom * cx],
-                     [0.0, zoom, cy + shift_px[1] - zoom * cy],
-                     [0.0, 0.0, 1.0]])
+    cx, cy = (w - 1) / 2.0, (h - 1) / 2.0  # the centre in the pixel-centre convention
+    return np.array(
+        [[zoom, 0.0, cx + shift_px[0] - zoom * cx], [0.0, zoom, cy + shift_px[1] - zoom * cy], [0.0, 0.0, 1.0]]
+    )
 
 
 def warp_affine(rgb: np.ndarray, aug_H_input: np.ndarray, pad: tuple) -> np.ndarray:
     """(h, w, 3) uint8 -> same size warped by the affine ``aug_H_input``; uncovered pixels get ``pad``
     (RGB 0..255). OpenCV's integer pixel coordinates are pixel centres, as ours."""
     h, w = rgb.shape[:2]
-    return cv2.warpAffine(rgb, aug_H_input[:2], (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-                          borderValue=tuple(float(c) for c in pad))
+    return cv2.warpAffine(
+        rgb,
+        aug_H_input[:2],
+        (w, h),
+        flags=cv2.INTER_LINEAR,
+        borderMode=cv2.BORDER_CONSTANT,
+        borderValue=tuple(float(c) for c in pad),
+    )
 
 
 def random_scale_crop(rgb: np.ndarray, config: AugmentConfig, rng: np.random.Generator, pad: tuple) -> tuple:

@@ -39,7 +39,7 @@ def recompute_batch_norm(model: nn.Module, forward_samples) -> int:
     saved = [m.momentum for m in norms]
     for m in norms:
         m.reset_running_stats()
-        m.momentum = None       # cumulative average over all batches seen, not an exponential one
+        m.momentum = None  # cumulative average over all batches seen, not an exponential one
     was_training = model.training
     model.train()
     try:

@@ -34,6 +34,7 @@ def _from_cameras(camera_of):
     def homography_of(view, frame):
         cam = camera_of(view, frame)
         return None if cam is None else (cam.img_H_ground(), (cam.width, cam.height))
+
     return homography_of
 
 
@@ -57,8 +58,10 @@ def _reference(dataset, frames, calibration_dir):
 
 def _need_dir(name: str, calibration_dir, sub: str) -> Path:
     if calibration_dir is None:
-        raise ValueError(f'calibration source {name!r} needs calibration_dir (the --out DIR of '
-                         f'matrix-tracker {"calibrate" if name.startswith("pnp") else "register"})')
+        raise ValueError(
+            f'calibration source {name!r} needs calibration_dir (the --out DIR of '
+            f'matrix-tracker {"calibrate" if name.startswith("pnp") else "register"})'
+        )
     path = Path(calibration_dir)
     if not (path / sub).is_dir():
         raise DatasetError(f'{path} has no {sub}/ (calibration source {name!r})')
@@ -84,10 +87,12 @@ def _pnp_factory(accepted: tuple, name: str):
             if statuses and statuses.get((view, frame)) not in accepted:
                 return None
             if not (path / 'calibrations/extrinsic' / f'extr_Drone{drone_number(view)}_{frame:04d}.xml').is_file():
-                return None     # no file written: calibrate had no result for this view and frame
+                return None  # no file written: calibrate had no result for this view and frame
             # the same MATRIX reader as the dataset's, on DIR's calibration files; a broken file raises
             return dataset._camera_from(path / 'calibrations', view, frame, size)
+
         return _from_cameras(camera_of)
+
     return factory
 
 
@@ -103,13 +108,19 @@ def _registration(dataset, frames, calibration_dir):
             return registration.img_H_ground, size
         if any(m in registration.message for m in BROKEN_RECORD):  # a file that said ok holds no usable homography
             raise DatasetError(registration.message)
-        return None     # register failed this frame: no result
+        return None  # register failed this frame: no result
+
     return homography_of
 
 
-CALIBRATION_SOURCES = {'ground_truth': _ground_truth, 'frozen_first': _frozen_first, 'reference': _reference,
-                       'pnp': _pnp_factory(('ok',), 'pnp'), 'pnp_stale': _pnp_factory(('ok', 'stale'), 'pnp_stale'),
-                       'registration': _registration}
+CALIBRATION_SOURCES = {
+    'ground_truth': _ground_truth,
+    'frozen_first': _frozen_first,
+    'reference': _reference,
+    'pnp': _pnp_factory(('ok',), 'pnp'),
+    'pnp_stale': _pnp_factory(('ok', 'stale'), 'pnp_stale'),
+    'registration': _registration,
+}
 
 
 def calibration_source(name: str, dataset, frames, calibration_dir=None):

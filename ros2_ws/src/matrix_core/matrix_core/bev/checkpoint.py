@@ -42,9 +42,14 @@ def export_checkpoint(src, dst, trained_with: str = '') -> Path:
     dst = Path(dst)
     dst.parent.mkdir(parents=True, exist_ok=True)
     tmp = dst.with_suffix(dst.suffix + '.tmp')
-    shipped = {'model': ckpt['model'], 'settings': ckpt['settings'], 'epoch': ckpt.get('epoch'),
-               'history': ckpt.get('history', []), 'trained_with': trained_with}
-    if 'averaged' in ckpt:      # weights averaged over these epochs (bev/averaging.py)
+    shipped = {
+        'model': ckpt['model'],
+        'settings': ckpt['settings'],
+        'epoch': ckpt.get('epoch'),
+        'history': ckpt.get('history', []),
+        'trained_with': trained_with,
+    }
+    if 'averaged' in ckpt:  # weights averaged over these epochs (bev/averaging.py)
         shipped['averaged'] = ckpt['averaged']
     torch.save(shipped, tmp)
     tmp.replace(dst)

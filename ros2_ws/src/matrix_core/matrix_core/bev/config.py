@@ -18,11 +18,11 @@ class SequenceSpec:
     """One MATRIX folder and the frames and calibration source to use from it."""
 
     path: str
-    frames: list = None            # [first, last] inclusive, or None for all
+    frames: list = None  # [first, last] inclusive, or None for all
     calibration: str = 'ground_truth'
-    views: list = None             # None: all views
-    calibration_dir: str = None    # output of matrix-tracker calibrate/register (pnp/registration sources)
-    weight: float = 1.0            # validation only: its weight in the checkpoint-selection score (val_score)
+    views: list = None  # None: all views
+    calibration_dir: str = None  # output of matrix-tracker calibrate/register (pnp/registration sources)
+    weight: float = 1.0  # validation only: its weight in the checkpoint-selection score (val_score)
 
     def __post_init__(self):
         if not self.weight >= 0:
@@ -47,7 +47,7 @@ class TrainConfig:
     bev: BevSettings = field(default_factory=BevSettings)
     tracker: TrackerSettings = field(default_factory=TrackerSettings)
     epochs: int = 10
-    max_steps_per_epoch: int = 0   # 0: the whole training set
+    max_steps_per_epoch: int = 0  # 0: the whole training set
     batch_size: int = 1
     lr: float = 1e-3
     lr_schedule: str = 'constant'  # 'constant' or 'cosine' (per step, down to lr_min_ratio * lr at the end)
@@ -57,12 +57,12 @@ class TrainConfig:
     # head sat at 0 (the median of its targets) until the heatmap had converged (overfitting 2 frames at
     # 0.25 m cells: L1 0.061 m after 60 steps vs 0.030 m with weight 10), i.e. never in a short run.
     loss_weights: dict = field(default_factory=lambda: {'heatmap': 1.0, 'offset': 10.0, 'tracking': 2.0})
-    view_dropout: float = 0.15     # probability of dropping each view in a training sample
-    augment: AugmentConfig = field(default_factory=AugmentConfig)   # training images only; off by default
+    view_dropout: float = 0.15  # probability of dropping each view in a training sample
+    augment: AugmentConfig = field(default_factory=AugmentConfig)  # training images only; off by default
     min_views: int = 4
     seed: int = 0
     num_threads: int = 1
-    validate_every: int = 1        # epochs
+    validate_every: int = 1  # epochs
     out_dir: str = 'out/train'
     cache_images: bool = True
     # Weight averaging (bev/averaging.py): after the last epoch, the mean of the weights of the last
@@ -82,8 +82,10 @@ class TrainConfig:
         if unknown:
             raise ValueError(f'config: unknown loss_weights {sorted(unknown)}; allowed heatmap, offset, tracking')
         if not 0 <= self.average_epochs <= self.epochs or self.bn_samples < 1:
-            raise ValueError(f'config: average_epochs must be in [0, epochs] and bn_samples >= 1, got '
-                             f'{self.average_epochs}, {self.bn_samples}')
+            raise ValueError(
+                f'config: average_epochs must be in [0, epochs] and bn_samples >= 1, got '
+                f'{self.average_epochs}, {self.bn_samples}'
+            )
         if not 0 <= self.view_dropout < 1:
             raise ValueError(f'config: view_dropout must be in [0, 1), got {self.view_dropout}')
 

@@ -16,7 +16,7 @@ from matrix_core.register.registration import check_homography
 
 MEAN = np.array([0.485, 0.456, 0.406], np.float32)
 STD = np.array([0.229, 0.224, 0.225], np.float32)
-PAD_RGB = tuple(float(c) for c in MEAN * 255.0)     # augmentation padding: zero after normalise_rgb
+PAD_RGB = tuple(float(c) for c in MEAN * 255.0)  # augmentation padding: zero after normalise_rgb
 
 
 def resize_rgb(bgr: np.ndarray, size: tuple) -> np.ndarray:
@@ -75,8 +75,17 @@ class BevFrames(torch.utils.data.Dataset):
             :meth:`sample`/:meth:`inputs`, so ``data[k]`` and evaluation are never augmented.
     """
 
-    def __init__(self, root, settings: BevSettings, frames=None, calibration: str = 'ground_truth', views=None,
-                 cache_images: bool = True, calibration_dir=None, augment: AugmentConfig = None):
+    def __init__(
+        self,
+        root,
+        settings: BevSettings,
+        frames=None,
+        calibration: str = 'ground_truth',
+        views=None,
+        cache_images: bool = True,
+        calibration_dir=None,
+        augment: AugmentConfig = None,
+    ):
         self.dataset = open_dataset(root)
         self.settings = settings
         self.frames = tuple(frames) if frames is not None else tuple(self.dataset.frames)
@@ -106,11 +115,13 @@ class BevFrames(torch.utils.data.Dataset):
             return self._cache[key]
         bgr = self.dataset.load_image(view, frame)
         if expected_size is not None and (bgr.shape[1], bgr.shape[0]) != tuple(expected_size):
-            raise DatasetError(f'image of {view} frame {frame} is {bgr.shape[1]}x{bgr.shape[0]}, its calibration '
-                               f'is for {expected_size[0]}x{expected_size[1]}')
+            raise DatasetError(
+                f'image of {view} frame {frame} is {bgr.shape[1]}x{bgr.shape[0]}, its calibration '
+                f'is for {expected_size[0]}x{expected_size[1]}'
+            )
         rgb = resize_rgb(bgr, self.input_size)
         if self._cache is not None:
-            self._cache[key] = rgb      # uint8: a quarter of the memory of the float input
+            self._cache[key] = rgb  # uint8: a quarter of the memory of the float input
         return rgb
 
     def image(self, view: str, frame: int, expected_size: tuple = None) -> np.ndarray:
@@ -125,8 +136,10 @@ class BevFrames(torch.utils.data.Dataset):
         """(feat_H_grid (V, 3, 3) float32, available (V,) bool) at ``frame``; a view without a homography
         from the calibration source gets zeros (nothing lies in front of it) and available False."""
         geometry = [self._view_geometry(v, frame) for v in self.views]
-        return (np.stack([np.zeros((3, 3)) if g is None else g[0] for g in geometry]).astype(np.float32),
-                np.array([g is not None for g in geometry], dtype=bool))
+        return (
+            np.stack([np.zeros((3, 3)) if g is None else g[0] for g in geometry]).astype(np.float32),
+            np.array([g is not None for g in geometry], dtype=bool),
+        )
 
     def _view_geometry(self, view: str, frame: int):
         """(feat_H_grid (3, 3), image (w, h)) of ``view`` at ``frame``, or None when the source has no result
@@ -136,8 +149,10 @@ class BevFrames(torch.utils.data.Dataset):
             if h is None:
                 return None
             img_H_ground = check_homography(h[0], f'img_H_ground of {view} frame {frame}')
-            H = check_homography(feat_H_grid(img_H_ground, self.grid.ground_H_grid, h[1], self.input_size,
-                                             self.stride), f'feat_H_grid of {view} frame {frame}')
+            H = check_homography(
+                feat_H_grid(img_H_ground, self.grid.ground_H_grid, h[1], self.input_size, self.stride),
+                f'feat_H_grid of {view} frame {frame}',
+            )
             return H, tuple(h[1])
         except Exception as exc:  # one view's broken calibration masks that view, never the run
             self.failures[(view, frame)] = f'calibration: {type(exc).__name__}: {exc}'
@@ -166,8 +181,11 @@ class BevFrames(torch.utils.data.Dataset):
                 rgb, aug_H_input = augment_view(rgb, augment, rng, PAD_RGB)
                 H[i] = augment_feat_H_grid(H[i].astype(np.float64), aug_H_input, self.stride)
             images[i] = normalise_rgb(rgb)
-        return {'images': torch.from_numpy(images), 'feat_H_grid': torch.from_numpy(H),
-                'view_mask': torch.from_numpy(mask)}
+        return {
+            'images': torch.from_numpy(images),
+            'feat_H_grid': torch.from_numpy(H),
+            'view_mask': torch.from_numpy(mask),
+        }
 
     def __getitem__(self, k: int) -> dict:
         return self.sample(k)
@@ -179,5 +197,9 @@ class BevFrames(torch.utils.data.Dataset):
         pos = ground_truth_positions(self.dataset, frame)
         prev_pos = ground_truth_positions(self.dataset, prev) if prev >= 0 else None
         targets = bev_targets(self.grid, pos, prev_pos, self.settings.heatmap_sigma_m)
-        return {**self.inputs(frame, rng), 'frame': frame, 'prev_frame': prev,
-                **{name: torch.from_numpy(arr) for name, arr in targets.items()}}
+        return {
+            **self.inputs(frame, rng),
+            'frame': frame,
+            'prev_frame': prev,
+            **{name: torch.from_numpy(arr) for name, arr in targets.items()},
+        }

@@ -28,8 +28,13 @@ class Peaks:
     score: torch.Tensor
 
 
-def find_peaks(heatmap_logits: torch.Tensor, grid: BevGrid, score_threshold: float = 0.3,
-               nms_radius_m: float = 0.5, max_detections: int = 200) -> Peaks:
+def find_peaks(
+    heatmap_logits: torch.Tensor,
+    grid: BevGrid,
+    score_threshold: float = 0.3,
+    nms_radius_m: float = 0.5,
+    max_detections: int = 200,
+) -> Peaks:
     """Peaks of ONE frame's (1, R, Q) ``heatmap_logits``: cells that are the maximum within ``nms_radius_m``
     (square max-pool window) with a sigmoid score >= ``score_threshold``, the ``max_detections`` highest.
     Non-finite logits raise ValueError."""
@@ -44,8 +49,9 @@ def find_peaks(heatmap_logits: torch.Tensor, grid: BevGrid, score_threshold: flo
     return Peaks(scores[0], rows[order], cols[order], s[order])
 
 
-def peak_detections(peaks: Peaks, grid: BevGrid, tracking: torch.Tensor, offset: torch.Tensor = None,
-                    subcell: str = 'heatmap') -> BevDetections:
+def peak_detections(
+    peaks: Peaks, grid: BevGrid, tracking: torch.Tensor, offset: torch.Tensor = None, subcell: str = 'heatmap'
+) -> BevDetections:
     """:class:`BevDetections` of ``peaks`` given the heads' values at them: ``tracking`` (N, 2) and, for
     ``subcell='offset'``, ``offset`` (N, 2) metres. Non-finite values raise ValueError."""
     for values in (tracking, offset):
@@ -65,9 +71,16 @@ def peak_detections(peaks: Peaks, grid: BevGrid, tracking: torch.Tensor, offset:
     return BevDetections(centres + off.reshape(-1, 2), peaks.score.numpy().astype(np.float64), trk)
 
 
-def decode_detections(heatmap_logits: torch.Tensor, offset: torch.Tensor, tracking: torch.Tensor,
-                      grid: BevGrid, score_threshold: float = 0.3, nms_radius_m: float = 0.5,
-                      max_detections: int = 200, subcell: str = 'heatmap') -> BevDetections:
+def decode_detections(
+    heatmap_logits: torch.Tensor,
+    offset: torch.Tensor,
+    tracking: torch.Tensor,
+    grid: BevGrid,
+    score_threshold: float = 0.3,
+    nms_radius_m: float = 0.5,
+    max_detections: int = 200,
+    subcell: str = 'heatmap',
+) -> BevDetections:
     """Detections of ONE frame from full maps.
 
     Args:
@@ -92,9 +105,9 @@ def heatmap_centroid(scores: torch.Tensor, rows: torch.Tensor, cols: torch.Tenso
     (R, Q) ``scores``, relative to that cell (cells outside the grid weigh 0)."""
     padded = F.pad(scores[None, None], (1, 1, 1, 1))[0, 0]
     d = torch.arange(-1, 2)
-    r = rows[:, None, None] + 1 + d[None, :, None]            # (N, 3, 1) padded row indices
-    c = cols[:, None, None] + 1 + d[None, None, :]            # (N, 1, 3)
-    w = padded[r, c]                                          # (N, 3, 3)
+    r = rows[:, None, None] + 1 + d[None, :, None]  # (N, 3, 1) padded row indices
+    c = cols[:, None, None] + 1 + d[None, None, :]  # (N, 1, 3)
+    w = padded[r, c]  # (N, 3, 3)
     total = w.sum(dim=(1, 2)).clamp(min=1e-12)
     dcol = (w * d[None, None, :]).sum(dim=(1, 2)) / total
     drow = (w * d[None, :, None]).sum(dim=(1, 2)) / total

@@ -53,7 +53,7 @@ class FrameResult:
 
     def __init__(self, heatmap: torch.Tensor, fused: torch.Tensor, carry):
         self.heatmap, self.fused, self._carry = heatmap, fused, carry
-        self.previous_term = None   # the carry's term in the next frame's temporal convolution, once computed
+        self.previous_term = None  # the carry's term in the next frame's temporal convolution, once computed
 
     @property
     def carry(self) -> torch.Tensor:
@@ -74,27 +74,32 @@ class FrameNetwork:
     def __init__(self, model, grid_shape: tuple):
         fuse = getattr(model.encoder, 'fuse', None)
         if not (isinstance(fuse, nn.Sequential) and isinstance(fuse[-1], nn.ReLU)):
-            raise ValueError('FrameNetwork needs non-negative encoder features (an encoder ending in a ReLU): '
-                             'its pooling relies on them')
+            raise ValueError(
+                'FrameNetwork needs non-negative encoder features (an encoder ending in a ReLU): '
+                'its pooling relies on them'
+            )
         self.grid_shape, self.stride = tuple(grid_shape), model.stride
         # channels_last: on one core the encoder measured 1.15x and the aggregation up to 1.8x faster than on
         # NCHW tensors; elsewhere no clear difference on this shared machine (scripts/bench_routes.py)
         self.encoder = fold_batch_norms(model.encoder).to(memory_format=CL)
         self.aggregate = fold_batch_norms(model.aggregate.convs).to(memory_format=CL)
         self.heads = copy.deepcopy(model.heads).eval().to(memory_format=CL)
-        self._taps = {}   # view index -> (feat_H_grid bytes, lifting_taps: (R*Q, 4) index, (R*Q, 4) weight, (R*Q,) seen)
+        self._taps = {}  # view index -> (feat_H_grid bytes, lifting_taps: (R*Q, 4) index, (R*Q, 4) weight, (R*Q,) seen)
         self.temporal = None
         if model.temporal is not None:
             convs = fold_batch_norms(model.temporal.convs).to(memory_format=CL)
             first, c = convs[0], model.heads.heatmap[0].in_channels
             w = first.weight.detach()
             self.temporal = {
-                'current': w[:, :c].contiguous(memory_format=CL), 'previous': w[:, c:2 * c].contiguous(memory_format=CL),
+                'current': w[:, :c].contiguous(memory_format=CL),
+                'previous': w[:, c : 2 * c].contiguous(memory_format=CL),
                 'bias': first.bias.detach(),
                 # the flag channel (1 with a previous frame) through the zero-padded convolution: fixed per grid
-                'flag': F.conv2d(torch.ones(1, 1, *self.grid_shape), w[:, 2 * c:], padding=first.padding
-                                 ).contiguous(memory_format=CL),
-                'rest': convs[1:]}
+                'flag': F.conv2d(torch.ones(1, 1, *self.grid_shape), w[:, 2 * c :], padding=first.padding).contiguous(
+                    memory_format=CL
+                ),
+                'rest': convs[1:],
+            }
 
     @torch.no_grad()
     def __call__(self, images, feat_H_grid, view_mask, previous=None) -> FrameResult:
@@ -102,7 +107,7 @@ class FrameNetwork:
         n_views = len(view_mask)
         rows, cols = self.grid_shape
         if views:
-            present = images if len(views) == n_views else images[views]   # no copy when every view is there
+            present = images if len(views) == n_views else images[views]  # no copy when every view is there
             feats = self.encoder(present.contiguous(memory_format=CL))
             pooled = self._lift_and_pool(feats, self._taps_of(views, feat_H_grid, feats.shape[-2:]), n_views)
         else:
@@ -113,11 +118,11 @@ class FrameNetwork:
         t = self.temporal
         current = F.conv2d(aggregated, t['current'], t['bias'], padding=1)
 
-        def carry():   # the pass without the previous features: what the next frame gets
+        def carry():  # the pass without the previous features: what the next frame gets
             return aggregated + t['rest'](torch.relu(current))
 
         if previous is None:
-            fused = carry = carry()   # the heads read it now
+            fused = carry = carry()  # the heads read it now
         else:
             with_previous = current + self._previous_term(previous) + t['flag']
             fused = aggregated + t['rest'](torch.relu(with_previous))
@@ -146,7 +151,7 @@ class FrameNetwork:
         frames), which a live graph's first frames should not pay. Nothing is kept (outputs, sampling taps)."""
         w, h = image_size
         images, mask = torch.zeros(n_views, 3, h, w), torch.ones(n_views, dtype=torch.bool)
-        identity = torch.eye(3).repeat(n_views, 1, 1)   # any finite warp: the grid's cells see the image's
+        identity = torch.eye(3).repeat(n_views, 1, 1)  # any finite warp: the grid's cells see the image's
         first = self(images, identity, mask)
         self.heads_at(self(images, identity, mask, first.carry).fused, torch.tensor([0]), torch.tensor([0]), True)
         self._taps.clear()
@@ -173,14 +178,14 @@ class FrameNetwork:
         k, c, h, w = feats.shape
         index = torch.cat([t[0] + i * h * w for i, t in enumerate(taps)])
         weight = torch.cat([t[1] for t in taps])
-        table = feats.permute(0, 2, 3, 1).reshape(k * h * w, c)   # a view of channels-last features
+        table = feats.permute(0, 2, 3, 1).reshape(k * h * w, c)  # a view of channels-last features
         lifted = F.embedding_bag(index, table, per_sample_weights=weight, mode='sum').reshape(k, -1, c)
         count = torch.stack([t[2] for t in taps]).sum(dim=0)[:, None]
         rows, cols = self.grid_shape
         pooled = lifted.new_empty(rows * cols, 2 * c + 1)
         torch.div(lifted.sum(dim=0), count.clamp(min=1.0), out=pooled[:, :c])
-        torch.amax(lifted, dim=0, out=pooled[:, c:2 * c])
-        torch.div(count, n_views, out=pooled[:, 2 * c:])
+        torch.amax(lifted, dim=0, out=pooled[:, c : 2 * c])
+        torch.div(count, n_views, out=pooled[:, 2 * c :])
         return pooled.reshape(1, rows, cols, 2 * c + 1).permute(0, 3, 1, 2)
 
     def _heatmap(self, fused):
@@ -193,7 +198,7 @@ class FrameNetwork:
         padded = F.pad(fused[0], (1, 1, 1, 1))
         d = torch.arange(3)
         patches = padded[:, rows[:, None, None] + d[None, :, None], cols[:, None, None] + d[None, None, :]]
-        patches = patches.permute(1, 0, 2, 3).reshape(len(rows), padded.shape[0] * 9)   # (N, C*3*3) as the weight
+        patches = patches.permute(1, 0, 2, 3).reshape(len(rows), padded.shape[0] * 9)  # (N, C*3*3) as the weight
 
         def at(head):
             conv, last = head[0], head[2]

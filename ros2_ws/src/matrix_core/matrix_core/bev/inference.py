@@ -43,7 +43,7 @@ class SequenceRunner:
         """One frame: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3), ``view_mask`` (V,) bool."""
         s = self.settings
         out = self.network(images, feat_H_grid, view_mask, self.previous)
-        self.previous = out if s.temporal else None   # its carry computed on demand (or by prepare_next)
+        self.previous = out if s.temporal else None  # its carry computed on demand (or by prepare_next)
         peaks = find_peaks(out.heatmap, self.grid, s.score_threshold, s.nms_radius_m, s.max_detections)
         tracking, offset = self.network.heads_at(out.fused, peaks.rows, peaks.cols, offset=s.subcell == 'offset')
         dets = peak_detections(peaks, self.grid, tracking, offset, s.subcell)

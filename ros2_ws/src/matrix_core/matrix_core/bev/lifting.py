@@ -28,8 +28,9 @@ def orient_ground_homography(img_H_ground: np.ndarray, image_size: tuple) -> np.
     return img_H_ground if g[2] > 0 else -img_H_ground
 
 
-def feat_H_grid(img_H_ground: np.ndarray, ground_H_grid: np.ndarray, image_size: tuple,
-                input_size: tuple, stride: int) -> np.ndarray:
+def feat_H_grid(
+    img_H_ground: np.ndarray, ground_H_grid: np.ndarray, image_size: tuple, input_size: tuple, stride: int
+) -> np.ndarray:
     """(3, 3) homography from BEV cells to feature-map pixels.
 
     Args:
@@ -54,8 +55,8 @@ def _feature_points(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tup
     rows, cols = grid_shape
     dt = feat_H_grid.dtype if feat_H_grid.is_floating_point() else torch.float32
     r, c = torch.meshgrid(torch.arange(rows, dtype=dt), torch.arange(cols, dtype=dt), indexing='ij')
-    cells = torch.stack([c, r, torch.ones_like(c)], dim=-1).reshape(1, -1, 3)       # (1, R*C, 3)
-    uvw = cells @ feat_H_grid.to(dt).transpose(1, 2)                                 # (N, R*C, 3)
+    cells = torch.stack([c, r, torch.ones_like(c)], dim=-1).reshape(1, -1, 3)  # (1, R*C, 3)
+    uvw = cells @ feat_H_grid.to(dt).transpose(1, 2)  # (N, R*C, 3)
     depth = uvw[..., 2]
     in_front = depth > 1e-9
     uv = uvw[..., :2] / torch.where(in_front, depth, torch.ones_like(depth)).unsqueeze(-1)
@@ -98,7 +99,7 @@ def lifting_taps(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tuple)
     """
     h, w = feat_size
     u, v, seen = _feature_points(feat_H_grid, feat_size, grid_shape)
-    u, v = torch.where(seen, u, -1.0), torch.where(seen, v, -1.0)   # far points: no overflow below
+    u, v = torch.where(seen, u, -1.0), torch.where(seen, v, -1.0)  # far points: no overflow below
     x0, y0 = u.floor(), v.floor()
     fx, fy = u - x0, v - y0
     seen = seen.to(feat_H_grid.dtype)

@@ -16,7 +16,7 @@ def focal_loss(logits: torch.Tensor, target: torch.Tensor, alpha: float = 2.0, b
     log_1p = F.logsigmoid(-logits)
     p = torch.sigmoid(logits)
     pos_loss = -((1 - p) ** alpha) * log_p * pos
-    neg_loss = -((1 - target) ** beta) * (p ** alpha) * log_1p * (1 - pos)
+    neg_loss = -((1 - target) ** beta) * (p**alpha) * log_1p * (1 - pos)
     return (pos_loss.sum() + neg_loss.sum()) / pos.sum().clamp(min=1.0)
 
 
@@ -28,8 +28,10 @@ def masked_l1(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor) -> t
 def bev_loss(out: dict, targets: dict, weights: dict = None) -> dict:
     """Total and per-term losses; ``weights`` default heatmap 1, offset 1, tracking 1."""
     w = {'heatmap': 1.0, 'offset': 1.0, 'tracking': 1.0, **(weights or {})}
-    terms = {'heatmap': focal_loss(out['heatmap'], targets['heatmap']),
-             'offset': masked_l1(out['offset'], targets['offset'], targets['center_mask']),
-             'tracking': masked_l1(out['tracking'], targets['tracking'], targets['tracking_mask'])}
+    terms = {
+        'heatmap': focal_loss(out['heatmap'], targets['heatmap']),
+        'offset': masked_l1(out['offset'], targets['offset'], targets['center_mask']),
+        'tracking': masked_l1(out['tracking'], targets['tracking'], targets['tracking_mask']),
+    }
     terms['total'] = sum(w[k] * terms[k] for k in ('heatmap', 'offset', 'tracking'))
     return terms

@@ -29,8 +29,7 @@ class BevFusionNet(nn.Module):
     frames). In training mode ``bev`` is only meaningful from a call without ``previous``.
     """
 
-    def __init__(self, feat_channels: int = 32, encoder_width: int = 32, bev_channels: int = 64,
-                 temporal: bool = True):
+    def __init__(self, feat_channels: int = 32, encoder_width: int = 32, bev_channels: int = 64, temporal: bool = True):
         super().__init__()
         self.encoder = SmallEncoder(feat_channels, encoder_width)
         self.aggregate = ViewAggregation(feat_channels, bev_channels)
@@ -41,10 +40,11 @@ class BevFusionNet(nn.Module):
     def forward(self, images, feat_H_grid, view_mask, grid_shape, previous=None, previous_valid=None) -> dict:
         b, v = images.shape[:2]
         view_mask = view_mask.bool()
-        feats = images.new_zeros(b * v, self.encoder.out_channels, images.shape[-2] // self.stride,
-                                 images.shape[-1] // self.stride)
+        feats = images.new_zeros(
+            b * v, self.encoder.out_channels, images.shape[-2] // self.stride, images.shape[-1] // self.stride
+        )
         present = view_mask.reshape(-1)
-        if present.any():   # missing views are not even encoded
+        if present.any():  # missing views are not even encoded
             feats[present] = self.encoder(images.reshape(b * v, *images.shape[2:])[present])
         bev, seen = warp_to_grid(feats, feat_H_grid.reshape(b * v, 3, 3), grid_shape)
         fused = self.aggregate(bev.reshape(b, v, *bev.shape[1:]), seen.reshape(b, v, *seen.shape[1:]), view_mask)

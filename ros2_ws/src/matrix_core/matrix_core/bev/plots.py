@@ -19,8 +19,9 @@ def save_heatmap_png(path, heatmap: np.ndarray, grid, gt_xy: np.ndarray, det_xy:
     detections (red crosses)."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(6, 6), dpi=110)
-    ax.imshow(heatmap, origin='lower', extent=(grid.x_min, grid.x_max, grid.y_min, grid.y_max), cmap='magma',
-              vmin=0, vmax=1)
+    ax.imshow(
+        heatmap, origin='lower', extent=(grid.x_min, grid.x_max, grid.y_min, grid.y_max), cmap='magma', vmin=0, vmax=1
+    )
     if len(gt_xy):
         ax.scatter(gt_xy[:, 0], gt_xy[:, 1], s=40, facecolors='none', edgecolors='lime', label='ground truth')
     if len(det_xy):

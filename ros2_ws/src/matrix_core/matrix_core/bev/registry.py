@@ -3,10 +3,12 @@
 from matrix_core.bev.model import BevFusionNet
 
 MODELS = {
-    'bev_small': lambda temporal=True: BevFusionNet(feat_channels=32, encoder_width=32, bev_channels=64,
-                                                    temporal=temporal),
-    'bev_tiny': lambda temporal=True: BevFusionNet(feat_channels=16, encoder_width=16, bev_channels=32,
-                                                   temporal=temporal),
+    'bev_small': lambda temporal=True: BevFusionNet(
+        feat_channels=32, encoder_width=32, bev_channels=64, temporal=temporal
+    ),
+    'bev_tiny': lambda temporal=True: BevFusionNet(
+        feat_channels=16, encoder_width=16, bev_channels=32, temporal=temporal
+    ),
 }
 
 

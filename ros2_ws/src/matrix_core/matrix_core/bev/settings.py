@@ -8,16 +8,27 @@ class BevSettings:
     """Grid, input resolution, model choice and decoding. Metres, pixels, probabilities."""
 
     model: str = field(default='bev_small', metadata={'help': 'model name in matrix_core.bev.registry.MODELS'})
-    cell_m: float = field(default=0.25, metadata={'help': 'BEV cell size (m); 0.25 keeps a 30 m scene at 128x128 cells, fast on a CPU'})
+    cell_m: float = field(
+        default=0.25, metadata={'help': 'BEV cell size (m); 0.25 keeps a 30 m scene at 128x128 cells, fast on a CPU'}
+    )
     margin_m: float = field(default=1.0, metadata={'help': 'grid margin (m) added around the dataset area'})
-    area: list[float] = field(default_factory=list, metadata={'help': 'x_min y_min x_max y_max of the area (m); empty: from the dataset'})
+    area: list[float] = field(
+        default_factory=list, metadata={'help': 'x_min y_min x_max y_max of the area (m); empty: from the dataset'}
+    )
     image_width: int = field(default=480, metadata={'help': 'network input width (px); images are resized to it'})
     image_height: int = field(default=272, metadata={'help': 'network input height (px), a multiple of 8'})
     heatmap_sigma_m: float = field(default=0.3, metadata={'help': 'std (m) of the Gaussian centre-heatmap targets'})
     score_threshold: float = field(default=0.3, metadata={'help': 'decoded peaks below this heatmap score are dropped'})
-    nms_radius_m: float = field(default=0.5, metadata={'help': 'peaks closer than this (m) are suppressed by max-pool NMS'})
+    nms_radius_m: float = field(
+        default=0.5, metadata={'help': 'peaks closer than this (m) are suppressed by max-pool NMS'}
+    )
     max_detections: int = field(default=200, metadata={'help': 'keep at most this many peaks per frame'})
-    subcell: str = field(default='heatmap', metadata={'help': "sub-cell position of a peak: 'heatmap' (3x3 score centroid, the most precise measured), 'offset' (offset head) or 'none' (cell centre)"})
+    subcell: str = field(
+        default='heatmap',
+        metadata={
+            'help': "sub-cell position of a peak: 'heatmap' (3x3 score centroid, the most precise measured), 'offset' (offset head) or 'none' (cell centre)"
+        },
+    )
     temporal: bool = field(default=True, metadata={'help': 'fuse the previous frame\'s BEV features'})
 
     def __post_init__(self):

@@ -32,17 +32,25 @@ def bev_targets(grid: BevGrid, positions: dict, previous: dict = None, sigma_m: 
     ids = [i for i in positions if grid.contains(np.asarray(positions[i])[:2])[0]]
     if ids:
         xy = np.array([np.asarray(positions[i], dtype=np.float64)[:2] for i in ids])
-        cells = np.floor(grid.world_to_cell(xy) + 0.5).astype(int)      # (col, row) of the containing cell
+        cells = np.floor(grid.world_to_cell(xy) + 0.5).astype(int)  # (col, row) of the containing cell
         cells[:, 0] = np.clip(cells[:, 0], 0, cols - 1)
         cells[:, 1] = np.clip(cells[:, 1], 0, rows - 1)
         centres = grid.cell_to_world(cells.astype(float))
         rr, cc = np.mgrid[0:rows, 0:cols]
         radius = int(np.ceil(3 * sigma_m / grid.cell))
         for k, (c, r) in enumerate(cells):
-            r0, r1, c0, c1 = max(r - radius, 0), min(r + radius + 1, rows), max(c - radius, 0), min(c + radius + 1, cols)
-            d2 = ((grid.cell_to_world(np.stack([cc[r0:r1, c0:c1].ravel(), rr[r0:r1, c0:c1].ravel()], 1))
-                   - xy[k]) ** 2).sum(1).reshape(r1 - r0, c1 - c0)
-            bump = np.exp(-d2 / (2 * sigma_m ** 2)).astype(np.float32)
+            r0, r1, c0, c1 = (
+                max(r - radius, 0),
+                min(r + radius + 1, rows),
+                max(c - radius, 0),
+                min(c + radius + 1, cols),
+            )
+            d2 = (
+                ((grid.cell_to_world(np.stack([cc[r0:r1, c0:c1].ravel(), rr[r0:r1, c0:c1].ravel()], 1)) - xy[k]) ** 2)
+                .sum(1)
+                .reshape(r1 - r0, c1 - c0)
+            )
+            bump = np.exp(-d2 / (2 * sigma_m**2)).astype(np.float32)
             heat[r0:r1, c0:c1] = np.maximum(heat[r0:r1, c0:c1], bump)
         for k, (c, r) in enumerate(cells):
             heat[r, c] = 1.0
@@ -51,5 +59,10 @@ def bev_targets(grid: BevGrid, positions: dict, previous: dict = None, sigma_m: 
             if previous is not None and ids[k] in previous:
                 tracking[:, r, c] = np.asarray(previous[ids[k]], dtype=np.float64)[:2] - xy[k]
                 track_mask[0, r, c] = 1.0
-    return {'heatmap': heat[None], 'offset': offset, 'tracking': tracking, 'center_mask': center,
-            'tracking_mask': track_mask}
+    return {
+        'heatmap': heat[None],
+        'offset': offset,
+        'tracking': tracking,
+        'center_mask': center,
+        'tracking_mask': track_mask,
+    }

@@ -18,12 +18,17 @@ class TemporalFusion(nn.Module):
     def __init__(self, channels: int):
         super().__init__()
         self.convs = nn.Sequential(
-            nn.Conv2d(2 * channels + 1, channels, 3, 1, 1, bias=False), nn.BatchNorm2d(channels), nn.ReLU(inplace=True),
-            nn.Conv2d(channels, channels, 3, 1, 2, dilation=2, bias=False), nn.BatchNorm2d(channels),
-            nn.ReLU(inplace=True))
+            nn.Conv2d(2 * channels + 1, channels, 3, 1, 1, bias=False),
+            nn.BatchNorm2d(channels),
+            nn.ReLU(inplace=True),
+            nn.Conv2d(channels, channels, 3, 1, 2, dilation=2, bias=False),
+            nn.BatchNorm2d(channels),
+            nn.ReLU(inplace=True),
+        )
 
-    def forward(self, current: torch.Tensor, previous: torch.Tensor = None,
-                previous_valid: torch.Tensor = None) -> torch.Tensor:
+    def forward(
+        self, current: torch.Tensor, previous: torch.Tensor = None, previous_valid: torch.Tensor = None
+    ) -> torch.Tensor:
         b, _, r, q = current.shape
         if previous is None:
             previous = torch.zeros_like(current)

@@ -35,12 +35,21 @@ def open_sequences(specs: list, config: TrainConfig, training: bool = False) -> 
     for spec in specs:
         path = Path(os.path.expanduser(os.path.expandvars(spec.path)))
         cdir = os.path.expanduser(os.path.expandvars(spec.calibration_dir)) if spec.calibration_dir else None
-        probe = BevFrames(path, config.bev, calibration=spec.calibration, views=spec.views,
-                          cache_images=config.cache_images, calibration_dir=cdir, augment=augment)
+        probe = BevFrames(
+            path,
+            config.bev,
+            calibration=spec.calibration,
+            views=spec.views,
+            cache_images=config.cache_images,
+            calibration_dir=cdir,
+            augment=augment,
+        )
         frames = spec.frame_list(probe.frames)
-        out.append(probe if frames == list(probe.frames) else
-                   BevFrames(path, config.bev, frames, spec.calibration, spec.views, config.cache_images, cdir,
-                             augment))
+        out.append(
+            probe
+            if frames == list(probe.frames)
+            else BevFrames(path, config.bev, frames, spec.calibration, spec.views, config.cache_images, cdir, augment)
+        )
     return out
 
 
@@ -48,7 +57,7 @@ def drop_views(mask: torch.Tensor, p: float, min_views: int, rng: np.random.Gene
     """Randomly switch off views of a (V,) bool mask with probability ``p`` each, keeping >= min_views."""
     present = np.flatnonzero(mask.numpy())
     drop = present[rng.random(len(present)) < p]
-    drop = drop[:max(len(present) - min_views, 0)]
+    drop = drop[: max(len(present) - min_views, 0)]
     out = mask.clone()
     out[torch.as_tensor(drop, dtype=torch.long)] = False
     return out
@@ -59,7 +68,7 @@ def augment_rng(seq: BevFrames, rng: np.random.Generator):
     stay deterministic, and the number of draws an augmentation makes does not shift the view dropout);
     None, without touching ``rng``, when the sequence is not augmented (runs then match those before
     augmentation existed)."""
-    return None if seq.augment is None else np.random.default_rng(rng.integers(2 ** 63))
+    return None if seq.augment is None else np.random.default_rng(rng.integers(2**63))
 
 
 def learning_rate(config: TrainConfig, step: int, total_steps: int) -> float:
@@ -111,8 +120,11 @@ def validation_record(specs: list, results: list) -> dict:
     sequences, each sequence's ``val_moda[LABEL]`` / ``val_mota[LABEL]`` / ``val_idf1[LABEL]``, and
     ``val_score``, the MODA averaged with each spec's ``weight``: what selects ``best.pt``."""
     record = {}
-    for key, get in (('moda', lambda r: r.detection.moda), ('mota', lambda r: r.tracking.mota),
-                     ('idf1', lambda r: r.tracking.idf1)):
+    for key, get in (
+        ('moda', lambda r: r.detection.moda),
+        ('mota', lambda r: r.tracking.mota),
+        ('idf1', lambda r: r.tracking.idf1),
+    ):
         record[f'val_{key}'] = float(np.mean([get(r) for r in results]))
         record.update({f'val_{key}[{spec.label}]': float(get(r)) for spec, r in zip(specs, results)})
     weights = np.array([spec.weight for spec in specs], dtype=float)
@@ -154,9 +166,9 @@ def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: boo
     for epoch in range(start_epoch, config.epochs):
         rng = np.random.default_rng(config.seed * 1000 + epoch)
         order = [index[i] for i in rng.permutation(len(index))]
-        batches = [order[i:i + config.batch_size] for i in range(0, len(order), config.batch_size)]
+        batches = [order[i : i + config.batch_size] for i in range(0, len(order), config.batch_size)]
         if config.max_steps_per_epoch:
-            batches = batches[:config.max_steps_per_epoch]
+            batches = batches[: config.max_steps_per_epoch]
         model.train()
         sums = {}
         bar = tqdm(batches, desc=f'epoch {epoch + 1}/{config.epochs}', unit='batch', disable=not progress)
@@ -181,9 +193,17 @@ def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: boo
                 save_checkpoint(out_dir / 'best.pt', model, config.bev, epoch=epoch + 1, metrics=record)
         history.append(record)
         log(' '.join(f'{k}={v:.4f}' if isinstance(v, float) else f'{k}={v}' for k, v in record.items()))
-        save_checkpoint(last, model, config.bev, optimizer=optimizer.state_dict(), epoch=epoch + 1,
-                        history=history, best=best, torch_rng=torch.get_rng_state(),
-                        config=json.loads(json.dumps(dataclasses.asdict(config), default=str)))
+        save_checkpoint(
+            last,
+            model,
+            config.bev,
+            optimizer=optimizer.state_dict(),
+            epoch=epoch + 1,
+            history=history,
+            best=best,
+            torch_rng=torch.get_rng_state(),
+            config=json.loads(json.dumps(dataclasses.asdict(config), default=str)),
+        )
         if config.average_epochs:
             save_checkpoint(out_dir / f'epoch{epoch + 1}.pt', model, config.bev, epoch=epoch + 1)
         (out_dir / 'history.json').write_text(json.dumps(history, indent=2))
@@ -195,8 +215,9 @@ def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: boo
     return history
 
 
-def average_last_epochs(config: TrainConfig, out_dir: Path, sequences: list, val_sequences: list, best: float,
-                        progress: bool = True) -> dict:
+def average_last_epochs(
+    config: TrainConfig, out_dir: Path, sequences: list, val_sequences: list, best: float, progress: bool = True
+) -> dict:
     """The mean of the weights of the last ``config.average_epochs`` epochs (``out_dir/epochN.pt``), its
     batch-norm statistics measured over ``config.bn_samples`` training steps (augmented, views dropped, as
     in training; seeded), written to ``averaged.pt`` and, when its ``val_score`` beats ``best`` (the best
@@ -205,19 +226,23 @@ def average_last_epochs(config: TrainConfig, out_dir: Path, sequences: list, val
     epochs = list(range(config.epochs - config.average_epochs + 1, config.epochs + 1))
     missing = [e for e in epochs if not (out_dir / f'epoch{e}.pt').is_file()]
     if missing:
-        raise FileNotFoundError(f'weight averaging needs {out_dir}/epochN.pt of epochs {missing} (written by a '
-                                'run with average_epochs set)')
+        raise FileNotFoundError(
+            f'weight averaging needs {out_dir}/epochN.pt of epochs {missing} (written by a run with average_epochs set)'
+        )
     model = build_model(config.bev.model, temporal=config.bev.temporal)
     model.load_state_dict(average_state_dicts([load_checkpoint(out_dir / f'epoch{e}.pt')['model'] for e in epochs]))
     rng = np.random.default_rng(config.seed * 1000 + config.epochs)
     index = [(si, k) for si, s in enumerate(sequences) for k in range(len(s))]
-    picks = [index[i] for i in rng.permutation(len(index))[:config.bn_samples]]
+    picks = [index[i] for i in rng.permutation(len(index))[: config.bn_samples]]
     recompute_batch_norm(model, lambda m: [training_step(m, sequences, [p], config, rng) for p in picks])
     record = {'epoch': config.epochs, 'averaged': epochs}
     if val_sequences:
         model.eval()
-        record.update(validation_record(config.val, [evaluate(model, s, config.tracker, progress=progress)
-                                                     for s in val_sequences]))
+        record.update(
+            validation_record(
+                config.val, [evaluate(model, s, config.tracker, progress=progress) for s in val_sequences]
+            )
+        )
     save_checkpoint(out_dir / 'averaged.pt', model, config.bev, epoch=config.epochs, averaged=epochs, metrics=record)
     if record.get('val_score', -np.inf) > best:
         save_checkpoint(out_dir / 'best.pt', model, config.bev, epoch=config.epochs, averaged=epochs, metrics=record)

@@ -30,9 +30,19 @@ from matrix_core.calib.detection import GridPiece
 from matrix_core.geometry.camera import Camera, pose_matrix, rotation_angle_deg
 
 # The 8 symmetries of a square grid as (c, r) -> (i, j) integer matrices.
-_ORIENTATIONS = [np.array(m) for m in ([[1, 0], [0, 1]], [[-1, 0], [0, 1]], [[1, 0], [0, -1]],
-                                       [[-1, 0], [0, -1]], [[0, 1], [1, 0]], [[0, -1], [1, 0]],
-                                       [[0, 1], [-1, 0]], [[0, -1], [-1, 0]])]
+_ORIENTATIONS = [
+    np.array(m)
+    for m in (
+        [[1, 0], [0, 1]],
+        [[-1, 0], [0, 1]],
+        [[1, 0], [0, -1]],
+        [[-1, 0], [0, -1]],
+        [[0, 1], [1, 0]],
+        [[0, -1], [1, 0]],
+        [[0, 1], [-1, 0]],
+        [[0, -1], [-1, 0]],
+    )
+]
 
 
 @dataclass
@@ -53,9 +63,10 @@ class Assignment:
 
 
 def _pose_ippe(world: np.ndarray, uv: np.ndarray, camera: Camera):
-    ok, rvec, tvec = cv2.solvePnP(world.reshape(-1, 1, 3), uv.reshape(-1, 1, 2), camera.K, camera.dist,
-                                  flags=cv2.SOLVEPNP_IPPE)
-    if not ok or not (np.all(np.isfinite(rvec)) and np.all(np.isfinite(tvec))):   # degenerate (e.g. collinear) grid
+    ok, rvec, tvec = cv2.solvePnP(
+        world.reshape(-1, 1, 3), uv.reshape(-1, 1, 2), camera.K, camera.dist, flags=cv2.SOLVEPNP_IPPE
+    )
+    if not ok or not (np.all(np.isfinite(rvec)) and np.all(np.isfinite(tvec))):  # degenerate (e.g. collinear) grid
         return None
     R = cv2.Rodrigues(rvec)[0]
     proj, _ = cv2.projectPoints(world.reshape(-1, 1, 3), rvec, tvec, camera.K, camera.dist)
@@ -108,10 +119,19 @@ def correlate_valid(values: np.ndarray, template: np.ndarray) -> np.ndarray:
     return np.einsum('klab,ab->kl', windows, template)
 
 
-def assign_piece(piece: GridPiece, boards: list, predicted: dict, prior: Camera, smooth: np.ndarray,
-                 max_index_error: float = 2.5, ambiguity_ratio: float = 0.95, index_separation: float = 0.6,
-                 max_prior_rotation_deg: float = 35.0, max_fit_rms_px: float = 1.5,
-                 max_orientation_residual: float = 0.5):
+def assign_piece(
+    piece: GridPiece,
+    boards: list,
+    predicted: dict,
+    prior: Camera,
+    smooth: np.ndarray,
+    max_index_error: float = 2.5,
+    ambiguity_ratio: float = 0.95,
+    index_separation: float = 0.6,
+    max_prior_rotation_deg: float = 35.0,
+    max_fit_rms_px: float = 1.5,
+    max_orientation_residual: float = 0.5,
+):
     """Assign board corners to ``piece`` (see the module docstring).
 
     Args:

@@ -32,8 +32,13 @@ class Checkerboard:
         if len(self.inner_corners) != 2 or min(self.inner_corners) < 2:
             raise ValueError(f'board {self.name}: inner_corners must be (nx, ny) >= 2, got {self.inner_corners}')
         u, v = np.asarray(self.axis_i, float), np.asarray(self.axis_j, float)
-        if u.shape != (3,) or v.shape != (3,) or abs(np.linalg.norm(u) - 1) > 1e-6 \
-                or abs(np.linalg.norm(v) - 1) > 1e-6 or abs(u @ v) > 1e-6:
+        if (
+            u.shape != (3,)
+            or v.shape != (3,)
+            or abs(np.linalg.norm(u) - 1) > 1e-6
+            or abs(np.linalg.norm(v) - 1) > 1e-6
+            or abs(u @ v) > 1e-6
+        ):
             raise ValueError(f'board {self.name}: axis_i and axis_j must be orthonormal 3-vectors')
         if len(self.origin) != 3:
             raise ValueError(f'board {self.name}: origin must be (x, y, z)')
@@ -50,12 +55,13 @@ class Checkerboard:
         """World metres of (possibly fractional or out-of-board) corner coordinates: (N,) i, j -> (N, 3)."""
         i = np.asarray(i, dtype=np.float64).reshape(-1, 1)
         j = np.asarray(j, dtype=np.float64).reshape(-1, 1)
-        return (np.asarray(self.origin, float) + self.square * (i * np.asarray(self.axis_i, float)
-                                                                + j * np.asarray(self.axis_j, float)))
+        return np.asarray(self.origin, float) + self.square * (
+            i * np.asarray(self.axis_i, float) + j * np.asarray(self.axis_j, float)
+        )
 
     def corner_indices(self) -> np.ndarray:
         """(nx * ny, 2) int (i, j) of every inner corner (i varies fastest)."""
-        j, i = np.mgrid[0:self.ny, 0:self.nx]
+        j, i = np.mgrid[0 : self.ny, 0 : self.nx]
         return np.stack([i.ravel(), j.ravel()], axis=1)
 
     def corners_world(self) -> np.ndarray:

@@ -28,16 +28,17 @@ class BoardSearch:
     """Outcome of :func:`search_boards`: ``fit`` None when no pose was found (``message`` says why)."""
 
     fit: PnPResult = None
-    correction: tuple = (0, 0)   # whole squares the grid was corrected by
+    correction: tuple = (0, 0)  # whole squares the grid was corrected by
     message: str = ''
-    corners: int = 0             # corners assigned (or PnP inliers when the pose was ambiguous)
+    corners: int = 0  # corners assigned (or PnP inliers when the pose was ambiguous)
     pieces_found: int = 0
     pieces_assigned: int = 0
     full_search: bool = False
 
 
-def find_board_pieces(gray: np.ndarray, scene: CalibScene, settings: CalibSettings, predicted: dict, prior: Camera,
-                      rough: bool) -> tuple:
+def find_board_pieces(
+    gray: np.ndarray, scene: CalibScene, settings: CalibSettings, predicted: dict, prior: Camera, rough: bool
+) -> tuple:
     """(pieces (list of GridPiece), whether the whole image was searched): pieces near the boards
     ``predicted`` puts in the (H, W) grey image, else (``full_search``) anywhere in it."""
     s = settings
@@ -46,19 +47,35 @@ def find_board_pieces(gray: np.ndarray, scene: CalibScene, settings: CalibSettin
     for board in scene.boards:
         rect = board_rectification(predicted[board.name], board, prior, s.px_per_square, margin)
         if rect is not None:
-            pieces += find_pieces(gray, rect[0], rect[1], s.pattern_size, s.max_pieces_per_board,
-                                  s.refine_subpixel, s.detect_accuracy)
+            pieces += find_pieces(
+                gray, rect[0], rect[1], s.pattern_size, s.max_pieces_per_board, s.refine_subpixel, s.detect_accuracy
+            )
     full_search = not pieces and s.full_search
     if full_search:
         scale, (width, height) = s.full_search_scale, scene.image_size
         img_H_search = None if scale == 1 else pixel_scale_homography(1.0 / scale, 1.0 / scale)
-        pieces = find_pieces(gray, img_H_search, (round(width * scale), round(height * scale)), s.pattern_size,
-                             s.max_pieces_per_board * len(scene.boards), refine=False, accuracy=s.detect_accuracy)
+        pieces = find_pieces(
+            gray,
+            img_H_search,
+            (round(width * scale), round(height * scale)),
+            s.pattern_size,
+            s.max_pieces_per_board * len(scene.boards),
+            refine=False,
+            accuracy=s.detect_accuracy,
+        )
     return pieces, full_search
 
 
-def assign_pieces(gray: np.ndarray, pieces: list, scene: CalibScene, settings: CalibSettings, predicted: dict,
-                  prior: Camera, rough: bool, max_turn_deg: float) -> tuple:
+def assign_pieces(
+    gray: np.ndarray,
+    pieces: list,
+    scene: CalibScene,
+    settings: CalibSettings,
+    predicted: dict,
+    prior: Camera,
+    rough: bool,
+    max_turn_deg: float,
+) -> tuple:
     """((N, 3) world, (N, 2) pixels, reasons the rejected pieces were rejected, pieces assigned): every
     piece's corners named; a corner found twice counts once."""
     s = settings
@@ -68,9 +85,18 @@ def assign_pieces(gray: np.ndarray, pieces: list, scene: CalibScene, settings: C
     predicted_ij = {name: np.linalg.inv(H) for name, H in predicted.items()}
     max_index_error = s.max_index_error * (4.0 if rough else 1.0)
     for piece in pieces:
-        a, why = assign_piece(piece, scene.boards, predicted_ij, prior, smooth, max_index_error,
-                              s.ambiguity_ratio, s.index_separation, max(max_turn_deg, s.max_prior_rotation_deg),
-                              2.0 * s.max_reprojection_px)
+        a, why = assign_piece(
+            piece,
+            scene.boards,
+            predicted_ij,
+            prior,
+            smooth,
+            max_index_error,
+            s.ambiguity_ratio,
+            s.index_separation,
+            max(max_turn_deg, s.max_prior_rotation_deg),
+            2.0 * s.max_reprojection_px,
+        )
         if a is None:
             reasons.append(why)
             continue
@@ -83,8 +109,16 @@ def assign_pieces(gray: np.ndarray, pieces: list, scene: CalibScene, settings: C
     return world, uv, reasons, assigned
 
 
-def search_boards(gray: np.ndarray, scene: CalibScene, settings: CalibSettings, predicted: dict, prior: Camera,
-                  rough: bool, max_turn_deg: float, timings: dict) -> BoardSearch:
+def search_boards(
+    gray: np.ndarray,
+    scene: CalibScene,
+    settings: CalibSettings,
+    predicted: dict,
+    prior: Camera,
+    rough: bool,
+    max_turn_deg: float,
+    timings: dict,
+) -> BoardSearch:
     """The pose of the (H, W) grey image from checkerboard pieces searched where ``predicted`` (board name ->
     (3, 3) image pixels <- corner indices) puts the boards.
 
@@ -98,8 +132,9 @@ def search_boards(gray: np.ndarray, scene: CalibScene, settings: CalibSettings, 
     t = time.perf_counter()
     world, uv, reasons, assigned = assign_pieces(gray, pieces, scene, s, predicted, prior, rough, max_turn_deg)
     timings['assign'] = time.perf_counter() - t
-    outcome = BoardSearch(corners=len(world), pieces_found=len(pieces), pieces_assigned=assigned,
-                          full_search=full_search)
+    outcome = BoardSearch(
+        corners=len(world), pieces_found=len(pieces), pieces_assigned=assigned, full_search=full_search
+    )
     t = time.perf_counter()
     if len(world) < s.min_corners:
         why = '; '.join(sorted(set(reasons))) or 'no board piece found'

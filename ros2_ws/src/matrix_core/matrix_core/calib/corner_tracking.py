@@ -46,6 +46,7 @@ def track_corners(gray: np.ndarray, scene: CalibScene, settings: CalibSettings, 
     if fit is None and settings.track_start_move > MAX_MOVE_SQUARES:
         # Only as a second try: from a prediction the strict first pass can verify, the looser one converged
         # to a worse pose (measured: real D2 frame 0, 0.12 instead of 0.06 deg from a guide 0.14 deg off).
-        fit, correction = grow_pose(gray, camera, scene, settings, TRACK_ROUNDS, settings.track_start_move,
-                                    TRACK_VERIFY_SHIFT)
+        fit, correction = grow_pose(
+            gray, camera, scene, settings, TRACK_ROUNDS, settings.track_start_move, TRACK_VERIFY_SHIFT
+        )
     return fit, correction

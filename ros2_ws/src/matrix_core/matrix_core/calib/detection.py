@@ -48,8 +48,7 @@ def clean_piece(grid: np.ndarray, threshold_px: float = 1.0, min_corners: int = 
     uv = grid.reshape(-1, 2)
     if len(uv) < min_corners:
         return None
-    _H, mask = cv2.findHomography(cr.astype(np.float64), uv, cv2.RANSAC, threshold_px, maxIters=500,
-                                  confidence=0.999)
+    _H, mask = cv2.findHomography(cr.astype(np.float64), uv, cv2.RANSAC, threshold_px, maxIters=500, confidence=0.999)
     if mask is None:
         return None
     keep = mask.ravel().astype(bool)
@@ -63,8 +62,7 @@ def _mask_piece(image: np.ndarray, corners_px: np.ndarray) -> None:
     pts = corners_px.reshape(-1, 2)
     centre = pts.mean(axis=0)
     rows, cols = corners_px.shape[:2]
-    steps = [np.linalg.norm(np.diff(corners_px, axis=a), axis=-1).mean() for a in (0, 1)
-             if corners_px.shape[a] > 1]
+    steps = [np.linalg.norm(np.diff(corners_px, axis=a), axis=-1).mean() for a in (0, 1) if corners_px.shape[a] > 1]
     grow = 1.5 * max(steps) if steps else 4.0
     vec = pts - centre
     norm = np.linalg.norm(vec, axis=1, keepdims=True)
@@ -84,8 +82,15 @@ def _refine(gray: np.ndarray, corners: np.ndarray) -> np.ndarray:
     return refined.reshape(grid.shape).astype(np.float64)
 
 
-def find_pieces(gray: np.ndarray, img_H_search=None, search_size=None, pattern_size: int = 3,
-                max_pieces: int = 3, refine: bool = True, accuracy: bool = True) -> list:
+def find_pieces(
+    gray: np.ndarray,
+    img_H_search=None,
+    search_size=None,
+    pattern_size: int = 3,
+    max_pieces: int = 3,
+    refine: bool = True,
+    accuracy: bool = True,
+) -> list:
     """Detect up to ``max_pieces`` partial grids in a search image warped out of ``gray``.
 
     Args:
@@ -104,13 +109,19 @@ def find_pieces(gray: np.ndarray, img_H_search=None, search_size=None, pattern_s
     if img_H_search is None:
         search = gray.copy()
     else:
-        search = cv2.warpPerspective(gray, np.asarray(img_H_search, dtype=np.float64), tuple(search_size),
-                                     flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                                     borderMode=cv2.BORDER_CONSTANT, borderValue=int(np.median(gray)))
+        search = cv2.warpPerspective(
+            gray,
+            np.asarray(img_H_search, dtype=np.float64),
+            tuple(search_size),
+            flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+            borderMode=cv2.BORDER_CONSTANT,
+            borderValue=int(np.median(gray)),
+        )
     pieces = []
     for _ in range(max_pieces):
         found, corners, meta = cv2.findChessboardCornersSBWithMeta(
-            search, (pattern_size, pattern_size), SB_FLAGS | (cv2.CALIB_CB_ACCURACY if accuracy else 0))
+            search, (pattern_size, pattern_size), SB_FLAGS | (cv2.CALIB_CB_ACCURACY if accuracy else 0)
+        )
         if not found or corners is None or meta is None:
             break
         rows, cols = meta.shape[:2]

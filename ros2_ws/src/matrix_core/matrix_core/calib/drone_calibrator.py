@@ -59,10 +59,17 @@ class CalibResult:
 
     def diagnostics(self) -> dict:
         """The figures a node reports per image (text values, as diagnostic_msgs/KeyValue carries them)."""
-        return {'status': self.status, 'reprojection_rms_px': f'{self.rms_px:.3f}', 'corners': str(self.corners),
-                'pieces_found': str(self.pieces_found), 'pieces_assigned': str(self.pieces_assigned),
-                'age_s': f'{self.age_s:.3f}', 'full_search': str(self.full_search), 'tracked': str(self.tracked),
-                'guide': self.motion}
+        return {
+            'status': self.status,
+            'reprojection_rms_px': f'{self.rms_px:.3f}',
+            'corners': str(self.corners),
+            'pieces_found': str(self.pieces_found),
+            'pieces_assigned': str(self.pieces_assigned),
+            'age_s': f'{self.age_s:.3f}',
+            'full_search': str(self.full_search),
+            'tracked': str(self.tracked),
+            'guide': self.motion,
+        }
 
 
 @dataclass
@@ -74,7 +81,7 @@ class _Frame:
     stamp: float
     t_start: float
     motion_data: tuple = None
-    guide: Camera = None   # the camera this frame's registration implies, if any
+    guide: Camera = None  # the camera this frame's registration implies, if any
     timings: dict = field(default_factory=dict)
 
     def finish_timing(self) -> None:
@@ -98,8 +105,9 @@ class DroneCalibrator:
             to predict where the boards moved in the first frame.
     """
 
-    def __init__(self, scene: CalibScene, settings: CalibSettings, initial_prior: Camera = None,
-                 initial_image: np.ndarray = None):
+    def __init__(
+        self, scene: CalibScene, settings: CalibSettings, initial_prior: Camera = None, initial_image: np.ndarray = None
+    ):
         self.scene = scene
         self.settings = settings
         self.initial = (initial_prior, initial_image)
@@ -111,7 +119,7 @@ class DroneCalibrator:
         initial_prior, initial_image = self.initial
         self.prior = None if initial_prior is None else self.scene.camera(initial_prior.cam_T_world)
         self.prior_is_initial = True
-        self.tracked_in_a_row = 0   # good frames since the last searched one
+        self.tracked_in_a_row = 0  # good frames since the last searched one
         self.last_good = None
         self.last_good_stamp = None
         self.image_motion = PriorImageMotion(self.settings, None if initial_image is None else _gray(initial_image))
@@ -124,8 +132,11 @@ class DroneCalibrator:
     def set_intrinsics(self, K, dist, image_size) -> bool:
         """Use other intrinsics from now on (e.g. from a CameraInfo stream); False (nothing changed) when they
         equal the current ones."""
-        if (np.allclose(K, self.scene.K) and np.allclose(dist, self.scene.dist)
-                and tuple(image_size) == tuple(self.scene.image_size)):
+        if (
+            np.allclose(K, self.scene.K)
+            and np.allclose(dist, self.scene.dist)
+            and tuple(image_size) == tuple(self.scene.image_size)
+        ):
             return False
         self.scene = self.scene.with_intrinsics(K, dist, image_size)
         if self.prior is not None:
@@ -141,7 +152,7 @@ class DroneCalibrator:
         measured."""
         t_start = time.perf_counter()
         restarted = self.restart.went_back(stamp)
-        if restarted:    # the old run's last pose is no prior for the new run's first frame
+        if restarted:  # the old run's last pose is no prior for the new run's first frame
             self.start_afresh()
         # Every RANSAC below draws from OpenCV's global RNG: seeding it per image makes the result depend on
         # this image and this drone's history only, not on other drones sharing the process.
@@ -157,7 +168,7 @@ class DroneCalibrator:
             guide, how = registered_camera(self.scene, registration)
             how = ('time went back, started afresh; ' if restarted else '') + how
             return self._guided(frame, guide, how) if guide is not None else self._from_prior(frame, how)
-        except cv2.error as exc:   # an OpenCV assertion on one odd frame must not end the drone's calibration
+        except cv2.error as exc:  # an OpenCV assertion on one odd frame must not end the drone's calibration
             return self._stale(stamp, f'OpenCV error, frame skipped: {str(exc).strip().splitlines()[-1]}')
 
     def _guided(self, frame: _Frame, guide: Camera, how: str) -> CalibResult:
@@ -165,7 +176,7 @@ class DroneCalibrator:
         frame.guide = guide
         frame.timings['motion'] = time.perf_counter() - frame.t_start
         predicted = predict_boards(self.scene.boards, guide)
-        if self.settings.track_registered:   # no drift: every registration is to the same reference
+        if self.settings.track_registered:  # no drift: every registration is to the same reference
             result = self._track(frame, predicted, how)
             if result is not None:
                 return result
@@ -177,14 +188,13 @@ class DroneCalibrator:
         s, timings = self.settings, frame.timings
         frame.motion_data = self.image_motion.measure(frame.gray)
         track = s.track_corners and not self.prior_is_initial and self.tracked_in_a_row < s.track_max_frames
-        cur_H_prev, how, homography = self.image_motion.since_prior(frame.motion_data,
-                                                                    s.track_matcher if track else '')
+        cur_H_prev, how, homography = self.image_motion.since_prior(frame.motion_data, s.track_matcher if track else '')
         timings['motion'] = time.perf_counter() - frame.t_start
         if track and homography:
             result = self._track(frame, predict_boards(self.scene.boards, self.prior, cur_H_prev), note + how)
             if result is not None:
                 return result
-        if track and s.track_matcher != s.motion_matcher:   # the search deserves the better prior
+        if track and s.track_matcher != s.motion_matcher:  # the search deserves the better prior
             t = time.perf_counter()
             cur_H_prev, how, _ = self.image_motion.since_prior(frame.motion_data)
             timings['motion_again'] = time.perf_counter() - t
@@ -207,8 +217,13 @@ class DroneCalibrator:
         s = self.settings
         max_turn_deg = s.initial_prior_jump_deg if self.prior_is_initial else s.max_jump_deg
         found = search_boards(frame.gray, self.scene, s, predicted, prior, rough, max_turn_deg, frame.timings)
-        info = dict(pieces_found=found.pieces_found, full_search=found.full_search, timings_s=frame.timings,
-                    motion=how, pieces_assigned=found.pieces_assigned)
+        info = dict(
+            pieces_found=found.pieces_found,
+            full_search=found.full_search,
+            timings_s=frame.timings,
+            motion=how,
+            pieces_assigned=found.pieces_assigned,
+        )
         if found.fit is None:
             frame.finish_timing()
             return self._stale(frame.stamp, found.message, corners=found.corners, **info)
@@ -235,8 +250,7 @@ class DroneCalibrator:
         move_m = float(np.linalg.norm(fit.camera.center - self.prior.center))
         turn_deg = rotation_angle_deg(fit.camera.R, self.prior.R)
         if move_m > jump_m or turn_deg > jump_deg:
-            return self._stale(stamp, f'implausible jump {move_m:.2f} m / {turn_deg:.1f} deg from the prior',
-                               **info)
+            return self._stale(stamp, f'implausible jump {move_m:.2f} m / {turn_deg:.1f} deg from the prior', **info)
         disagreement = registration_disagreement(fit.camera, frame.guide, s) if frame.guide is not None else ''
         if disagreement:
             return self._stale(stamp, disagreement, **info)

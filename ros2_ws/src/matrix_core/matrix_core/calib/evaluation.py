@@ -15,9 +15,17 @@ def summarize_errors(rows: list) -> dict:
     ok = [r for r in rows if r['status'] == 'ok']
     rot = np.array([r['rot_err_deg'] for r in ok])
     ctr = np.array([r['centre_err_m'] for r in ok])
-    out = {'frames': len(rows), 'ok': len(ok), 'stale': sum(r['status'] == 'stale' for r in rows),
-           'failed': sum(r['status'] == 'failed' for r in rows)}
+    out = {
+        'frames': len(rows),
+        'ok': len(ok),
+        'stale': sum(r['status'] == 'stale' for r in rows),
+        'failed': sum(r['status'] == 'failed' for r in rows),
+    }
     if len(ok):
-        out.update(rot_median_deg=float(np.median(rot)), rot_max_deg=float(rot.max()),
-                   centre_median_m=float(np.median(ctr)), centre_max_m=float(ctr.max()))
+        out.update(
+            rot_median_deg=float(np.median(rot)),
+            rot_max_deg=float(rot.max()),
+            centre_median_m=float(np.median(ctr)),
+            centre_max_m=float(ctr.max()),
+        )
     return out

@@ -57,12 +57,19 @@ class SaddleMap:
     polarity: np.ndarray
 
 
-def saddle_map(gray: np.ndarray, camera: Camera, board: Checkerboard, px_per_square: float = 10.0,
-               extend: int = 3, max_move_squares: float = MAX_MOVE_SQUARES, min_contrast: float = 20.0) -> SaddleMap:
+def saddle_map(
+    gray: np.ndarray,
+    camera: Camera,
+    board: Checkerboard,
+    px_per_square: float = 10.0,
+    extend: int = 3,
+    max_move_squares: float = MAX_MOVE_SQUARES,
+    min_contrast: float = 20.0,
+) -> SaddleMap:
     """Refine and verify every corner predicted by ``camera`` from ``-extend`` to ``n - 1 + extend``."""
     lo_i, lo_j = -extend, -extend
     hi_i, hi_j = board.nx - 1 + extend, board.ny - 1 + extend
-    J, I = np.mgrid[lo_j:hi_j + 1, lo_i:hi_i + 1]
+    J, I = np.mgrid[lo_j : hi_j + 1, lo_i : hi_i + 1]
     ij = np.stack([I.ravel(), J.ravel()], axis=1)
     empty = SaddleMap(board, np.zeros((0, 2), int), np.zeros((0, 2)), np.zeros(0))
     world = board.points(ij[:, 0], ij[:, 1])
@@ -88,16 +95,25 @@ def saddle_map(gray: np.ndarray, camera: Camera, board: Checkerboard, px_per_squ
     # so it already shows (weakly) at its prediction; the rest (most of the virtual corners beyond the board,
     # where cornerSubPix runs all its iterations on ground) are not refined at all. From a rough prior it may
     # not show yet: refine everything.
-    todo = (_polarity(smooth, pred, px_per_square, min_contrast * PREFILTER_CONTRAST) != 0
-            if max_move_squares <= MAX_MOVE_SQUARES else np.ones(len(ij), dtype=bool))
+    todo = (
+        _polarity(smooth, pred, px_per_square, min_contrast * PREFILTER_CONTRAST) != 0
+        if max_move_squares <= MAX_MOVE_SQUARES
+        else np.ones(len(ij), dtype=bool)
+    )
     if todo.any():
         half = max(2, int(px_per_square * 0.4))
         criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.01)
-        refined[todo] = cv2.cornerSubPix(rect, pred[todo].astype(np.float32).reshape(-1, 1, 2).copy(), (half, half),
-                                         (-1, -1), criteria).reshape(-1, 2).astype(np.float64)
+        refined[todo] = (
+            cv2.cornerSubPix(
+                rect, pred[todo].astype(np.float32).reshape(-1, 1, 2).copy(), (half, half), (-1, -1), criteria
+            )
+            .reshape(-1, 2)
+            .astype(np.float64)
+        )
         moved = np.linalg.norm(refined[todo] - pred[todo], axis=1) / px_per_square
-        polarity[todo] = np.where(moved > max_move_squares, 0,
-                                  _polarity(smooth, refined[todo], px_per_square, min_contrast) * sign[todo])
+        polarity[todo] = np.where(
+            moved > max_move_squares, 0, _polarity(smooth, refined[todo], px_per_square, min_contrast) * sign[todo]
+        )
     back = cv2.perspectiveTransform(refined.reshape(-1, 1, 2), img_H_rect).reshape(-1, 2)
     return SaddleMap(board, ij, back, polarity)
 
@@ -129,7 +145,7 @@ def saddle_counts(maps: list, max_shift: int = 2) -> dict:
     shifts = np.array([(di, dj) for di in range(-max_shift, max_shift + 1) for dj in range(-max_shift, max_shift + 1)])
     parity = np.where(shifts.sum(axis=1) % 2 == 0, 1, -1)
     total = np.zeros(len(shifts), dtype=int)
-    for m in maps:   # (shifts, corners) at once
+    for m in maps:  # (shifts, corners) at once
         ti, tj = m.ij[None, :, 0] + shifts[:, :1], m.ij[None, :, 1] + shifts[:, 1:]
         inside = (ti >= 0) & (ti < m.board.nx) & (tj >= 0) & (tj < m.board.ny)
         total += np.sum(inside & (m.polarity[None, :] == parity[:, None]), axis=1)
@@ -161,21 +177,37 @@ def corrected_correspondences(maps: list, correction: tuple) -> tuple:
     world, uv = [], []
     for m in maps:
         t = m.ij + [di, dj]
-        keep = ((t[:, 0] >= 0) & (t[:, 0] < m.board.nx) & (t[:, 1] >= 0) & (t[:, 1] < m.board.ny)
-                & (m.polarity == parity))
+        keep = (
+            (t[:, 0] >= 0) & (t[:, 0] < m.board.nx) & (t[:, 1] >= 0) & (t[:, 1] < m.board.ny) & (m.polarity == parity)
+        )
         world.append(m.board.points(t[keep, 0], t[keep, 1]))
         uv.append(m.uv[keep])
     return np.concatenate(world) if world else np.zeros((0, 3)), np.concatenate(uv) if uv else np.zeros((0, 2))
 
 
-def _saddle_maps(gray: np.ndarray, camera: Camera, scene: CalibScene, settings: CalibSettings,
-                 max_move_squares: float = MAX_MOVE_SQUARES, max_shift: int = GROW_SHIFT) -> list:
-    return [saddle_map(gray, camera, board, settings.px_per_square, extend=max_shift + 1,
-                       max_move_squares=max_move_squares) for board in scene.boards]
+def _saddle_maps(
+    gray: np.ndarray,
+    camera: Camera,
+    scene: CalibScene,
+    settings: CalibSettings,
+    max_move_squares: float = MAX_MOVE_SQUARES,
+    max_shift: int = GROW_SHIFT,
+) -> list:
+    return [
+        saddle_map(gray, camera, board, settings.px_per_square, extend=max_shift + 1, max_move_squares=max_move_squares)
+        for board in scene.boards
+    ]
 
 
-def grow_pose(gray: np.ndarray, camera: Camera, scene: CalibScene, settings: CalibSettings, rounds: int = 1,
-              start_move: float = MAX_MOVE_SQUARES, verify_shift: int = GROW_SHIFT):
+def grow_pose(
+    gray: np.ndarray,
+    camera: Camera,
+    scene: CalibScene,
+    settings: CalibSettings,
+    rounds: int = 1,
+    start_move: float = MAX_MOVE_SQUARES,
+    verify_shift: int = GROW_SHIFT,
+):
     """(PnPResult or None, whole-square correction or None when ambiguous) of the (H, W) grey image, from
     the rough pose ``camera``.
 
@@ -205,10 +237,13 @@ def grow_pose(gray: np.ndarray, camera: Camera, scene: CalibScene, settings: Cal
             return None, None
         # A fit from the looser first pass is never the answer: its corners may have converged off (measured:
         # real D2 frame 0, 0.12 deg instead of 0.06); the next round solves from the strict saddles.
-        settled = ((round_ > 0 or start_move <= MAX_MOVE_SQUARES) and verified <= count * 1.02
-                   and rotation_angle_deg(fit.camera.R, previous.R) < SETTLED_DEG
-                   and np.linalg.norm(fit.camera.center - previous.center) < SETTLED_M)
+        settled = (
+            (round_ > 0 or start_move <= MAX_MOVE_SQUARES)
+            and verified <= count * 1.02
+            and rotation_angle_deg(fit.camera.R, previous.R) < SETTLED_DEG
+            and np.linalg.norm(fit.camera.center - previous.center) < SETTLED_M
+        )
         if settled or round_ == rounds - 1:
             return fit, total
         count, previous = verified, fit.camera
-    return None, None   # not reached
+    return None, None  # not reached

@@ -25,9 +25,12 @@ from matrix_core.calib.settings import CalibSettings
 
 # LSH: about 35 ms instead of 100-150 ms for 3000 x 3000 binary descriptors, slightly worse priors
 # (its hash tables draw from OpenCV's RNG, which the calibrator seeds per image).
-MATCHERS = {'lsh': lambda: cv2.FlannBasedMatcher(dict(algorithm=6, table_number=6, key_size=12, multi_probe_level=1),
-                                                 dict(checks=50)),
-            'brute': lambda: cv2.BFMatcher(cv2.NORM_HAMMING)}
+MATCHERS = {
+    'lsh': lambda: cv2.FlannBasedMatcher(
+        dict(algorithm=6, table_number=6, key_size=12, multi_probe_level=1), dict(checks=50)
+    ),
+    'brute': lambda: cv2.BFMatcher(cv2.NORM_HAMMING),
+}
 
 
 @dataclass
@@ -41,8 +44,15 @@ class Features:
 class GroundMotion:
     """ORB features at ``scale`` of the full image and the homography between two frames' features."""
 
-    def __init__(self, scale: float = 0.5, features: int = 3000, ratio: float = 0.8,
-                 ransac_px: float = 2.0, min_inliers: int = 40, matcher: str = 'brute'):
+    def __init__(
+        self,
+        scale: float = 0.5,
+        features: int = 3000,
+        ratio: float = 0.8,
+        ransac_px: float = 2.0,
+        min_inliers: int = 40,
+        matcher: str = 'brute',
+    ):
         self.scale, self.ratio, self.ransac_px, self.min_inliers = scale, ratio, ransac_px, min_inliers
         self.orb = cv2.ORB_create(features, fastThreshold=10)
         if matcher not in MATCHERS:
@@ -65,7 +75,7 @@ class GroundMotion:
         name = matcher or self.matcher
         if name not in MATCHERS:
             raise ValueError(f'matcher must be one of {sorted(MATCHERS)}, got {name!r}')
-        if name not in self.matchers:   # made on first use: most calibrators only ever use one
+        if name not in self.matchers:  # made on first use: most calibrators only ever use one
             self.matchers[name] = MATCHERS[name]()
         pairs = self.matchers[name].knnMatch(previous.descriptors, current.descriptors, k=2)
         good = [p[0] for p in pairs if len(p) == 2 and p[0].distance < self.ratio * p[1].distance]
@@ -73,8 +83,7 @@ class GroundMotion:
             return None, len(good)
         src = previous.points[[m.queryIdx for m in good]]
         dst = current.points[[m.trainIdx for m in good]]
-        H, mask = cv2.findHomography(src, dst, cv2.RANSAC, self.ransac_px / self.scale, maxIters=2000,
-                                     confidence=0.999)
+        H, mask = cv2.findHomography(src, dst, cv2.RANSAC, self.ransac_px / self.scale, maxIters=2000, confidence=0.999)
         inliers = int(mask.sum()) if mask is not None else 0
         if H is None or inliers < self.min_inliers or not np.all(np.isfinite(H)):
             return None, inliers
@@ -92,8 +101,11 @@ class PriorImageMotion:
 
     def __init__(self, settings: CalibSettings, prior_gray: np.ndarray = None):
         self.settings = settings
-        self.ground = GroundMotion(settings.motion_scale, settings.motion_features, matcher=settings.motion_matcher) \
-            if settings.motion_scale > 0 else None
+        self.ground = (
+            GroundMotion(settings.motion_scale, settings.motion_features, matcher=settings.motion_matcher)
+            if settings.motion_scale > 0
+            else None
+        )
         self.prior_features = self.prior_small = None
         self.prior_gray = prior_gray
 

@@ -33,11 +33,12 @@ def solve_pnp(world: np.ndarray, uv: np.ndarray, intrinsics: Camera, ransac_thre
     img = np.ascontiguousarray(uv, dtype=np.float64).reshape(-1, 1, 2)
     if len(world) < 6:
         return None
-    kwargs = dict(reprojectionError=ransac_threshold_px, confidence=0.999, iterationsCount=200,
-                  flags=cv2.SOLVEPNP_SQPNP)
+    kwargs = dict(
+        reprojectionError=ransac_threshold_px, confidence=0.999, iterationsCount=200, flags=cv2.SOLVEPNP_SQPNP
+    )
     try:
         ok, rvec, tvec, inl = cv2.solvePnPRansac(world, img, intrinsics.K, intrinsics.dist, **kwargs)
-    except cv2.error:   # SQPnP asserts on degenerate samples (measured: corners predicted by a bad homography)
+    except cv2.error:  # SQPnP asserts on degenerate samples (measured: corners predicted by a bad homography)
         return None
     if not ok or inl is None or len(inl) < 6:
         return None

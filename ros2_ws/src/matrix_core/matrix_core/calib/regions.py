@@ -41,9 +41,13 @@ def image_H_board(camera: Camera, board: Checkerboard, cur_H_prev=None) -> np.nd
     the current one (see :mod:`matrix_core.calib.motion`). Assumes ``axis_i``/``axis_j`` are horizontal.
     """
     o = np.asarray(board.origin, dtype=np.float64)
-    world_H_ij = np.array([[board.axis_i[0] * board.square, board.axis_j[0] * board.square, o[0]],
-                           [board.axis_i[1] * board.square, board.axis_j[1] * board.square, o[1]],
-                           [0.0, 0.0, 1.0]])
+    world_H_ij = np.array(
+        [
+            [board.axis_i[0] * board.square, board.axis_j[0] * board.square, o[0]],
+            [board.axis_i[1] * board.square, board.axis_j[1] * board.square, o[1]],
+            [0.0, 0.0, 1.0],
+        ]
+    )
     H = camera.img_H_ground(float(o[2])) @ world_H_ij
     return H if cur_H_prev is None else np.asarray(cur_H_prev, dtype=np.float64) @ H
 
@@ -53,8 +57,9 @@ def predict_boards(boards: list, camera: Camera, cur_H_prev=None) -> dict:
     return {board.name: image_H_board(camera, board, cur_H_prev) for board in boards}
 
 
-def board_rectification(img_H_ij: np.ndarray, board: Checkerboard, camera: Camera,
-                        px_per_square: float = 10.0, margin_cells: float = 3.0):
+def board_rectification(
+    img_H_ij: np.ndarray, board: Checkerboard, camera: Camera, px_per_square: float = 10.0, margin_cells: float = 3.0
+):
     """Homography and size of a fronto-parallel view of ``board`` predicted by ``img_H_ij``.
 
     In MATRIX images the boards are seen at a grazing angle (rows 3-6 px apart): a rectified view, where
@@ -71,8 +76,12 @@ def board_rectification(img_H_ij: np.ndarray, board: Checkerboard, camera: Camer
     if np.any(corners[:, 2] <= 1e-9):
         return None
     uv = corners[:, :2] / corners[:, 2:]
-    if (uv[:, 0].max() < 0 or uv[:, 1].max() < 0 or uv[:, 0].min() > camera.width - 1
-            or uv[:, 1].min() > camera.height - 1):
+    if (
+        uv[:, 0].max() < 0
+        or uv[:, 1].max() < 0
+        or uv[:, 0].min() > camera.width - 1
+        or uv[:, 1].min() > camera.height - 1
+    ):
         return None
     width = int(round((hi_i - lo_i) * px_per_square))
     height = int(round((hi_j - lo_j) * px_per_square))

@@ -50,8 +50,13 @@ class CalibScene:
 
     def with_intrinsics(self, K, dist, image_size) -> 'CalibScene':
         """A copy with other intrinsics (e.g. from a CameraInfo stream)."""
-        return CalibScene(self.boards, np.asarray(K, float).reshape(3, 3), np.asarray(dist, float).reshape(5),
-                          tuple(int(v) for v in image_size), dict(self.initial_poses))
+        return CalibScene(
+            self.boards,
+            np.asarray(K, float).reshape(3, 3),
+            np.asarray(dist, float).reshape(5),
+            tuple(int(v) for v in image_size),
+            dict(self.initial_poses),
+        )
 
 
 def _check_keys(where: str, got: dict, allowed: set) -> None:
@@ -71,12 +76,17 @@ def scene_from_dict(data: dict, where: str = 'calibration config') -> CalibScene
     for k, b in enumerate(data['boards']):
         _check_keys(f'{where} boards[{k}]', b, _BOARD_KEYS)
         try:
-            boards.append(Checkerboard(
-                name=str(b.get('name', f'board{k}')), origin=tuple(float(v) for v in b['origin']),
-                square=float(b['square']), inner_corners=tuple(int(v) for v in b['inner_corners']),
-                axis_i=tuple(float(v) for v in b.get('axis_i', (1, 0, 0))),
-                axis_j=tuple(float(v) for v in b.get('axis_j', (0, 1, 0))),
-                first_cell_light=bool(b.get('first_cell_light', True))))
+            boards.append(
+                Checkerboard(
+                    name=str(b.get('name', f'board{k}')),
+                    origin=tuple(float(v) for v in b['origin']),
+                    square=float(b['square']),
+                    inner_corners=tuple(int(v) for v in b['inner_corners']),
+                    axis_i=tuple(float(v) for v in b.get('axis_i', (1, 0, 0))),
+                    axis_j=tuple(float(v) for v in b.get('axis_j', (0, 1, 0))),
+                    first_cell_light=bool(b.get('first_cell_light', True)),
+                )
+            )
         except KeyError as exc:
             raise ValueError(f'{where} boards[{k}]: missing {exc}') from None
     intr = data.get('intrinsics') or {}
@@ -85,7 +95,7 @@ def scene_from_dict(data: dict, where: str = 'calibration config') -> CalibScene
         raise ValueError(f'{where}: intrinsics.K and image_size are required')
     dist = np.zeros(5)
     d = np.asarray(intr.get('dist', []), dtype=np.float64).reshape(-1)
-    dist[:min(5, len(d))] = d[:5]
+    dist[: min(5, len(d))] = d[:5]
     size = tuple(int(v) for v in data['image_size'])
     if len(size) != 2:
         raise ValueError(f'{where}: image_size must be [width, height], got {list(size)}')

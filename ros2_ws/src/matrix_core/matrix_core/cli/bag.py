@@ -18,8 +18,9 @@ from matrix_core.datasets import MatrixDataset
 
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser('bag', help='write a MATRIX-format folder as a rosbag2 sequence bag, or list a bag',
-                              description=__doc__)
+    p = subparsers.add_parser(
+        'bag', help='write a MATRIX-format folder as a rosbag2 sequence bag, or list a bag', description=__doc__
+    )
     p.add_argument('source', help='MATRIX-format folder (to write a bag) or a bag folder (to list it)')
     p.add_argument('--out', help='bag folder to create (must not exist)')
     p.add_argument('--compressed', action='store_true', help='store JPEG CompressedImage instead of raw Image')

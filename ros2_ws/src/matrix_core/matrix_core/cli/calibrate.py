@@ -40,23 +40,48 @@ from matrix_core.register.file_frame import read_registration
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
 STATUS_FILE = 'calibration_status.csv'
-COLUMNS = ('view', 'frame', 'status', 'written', 'rms_px', 'corners', 'pieces_found', 'pieces_assigned', 'tracked',
-           'age_s', 'time_s', 'rot_err_deg', 'centre_err_m', 'registration', 'guide', 'failure', 'message')
+COLUMNS = (
+    'view',
+    'frame',
+    'status',
+    'written',
+    'rms_px',
+    'corners',
+    'pieces_found',
+    'pieces_assigned',
+    'tracked',
+    'age_s',
+    'time_s',
+    'rot_err_deg',
+    'centre_err_m',
+    'registration',
+    'guide',
+    'failure',
+    'message',
+)
 NAN = float('nan')
 
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser('calibrate', help='estimate every frame\'s camera pose from the ground checkerboards',
-                              description=__doc__)
+    p = subparsers.add_parser(
+        'calibrate', help='estimate every frame\'s camera pose from the ground checkerboards', description=__doc__
+    )
     add_selection_arguments(p, 'calibrate', 'MATRIX-format folder', 'output folder')
     p.add_argument('--frame-period', type=float, default=0.5, help='seconds between frames (for ages)')
     p.add_argument('--compare', action='store_true', help='print errors against the stored calibrations')
-    p.add_argument('--registration', metavar='REG', default=None,
-                   help='the --out folder of `matrix-tracker register` on this dataset: each frame\'s registration '
-                        'guides its calibration (as the live calib node with use_registration)')
-    p.add_argument('--write-stale', action='store_true',
-                   help='also write the last good pose of stale frames as calibration files (default: only ok '
-                        'frames; the CSV lists every frame)')
+    p.add_argument(
+        '--registration',
+        metavar='REG',
+        default=None,
+        help='the --out folder of `matrix-tracker register` on this dataset: each frame\'s registration '
+        'guides its calibration (as the live calib node with use_registration)',
+    )
+    p.add_argument(
+        '--write-stale',
+        action='store_true',
+        help='also write the last good pose of stale frames as calibration files (default: only ok '
+        'frames; the CSV lists every frame)',
+    )
     add_settings_arguments(p, CalibSettings)
     p.set_defaults(func=run)
 
@@ -68,19 +93,34 @@ def registration_folder(path) -> Path:
     for folder in (path / 'registration', path):
         if folder.is_dir() and any(folder.glob('Drone*_*.json')):
             return folder
-    raise DatasetError(f'{path}: no registration records (Drone*_*.json) in it or in its registration/ '
-                       f'(the --out folder of `matrix-tracker register`)')
+    raise DatasetError(
+        f'{path}: no registration records (Drone*_*.json) in it or in its registration/ '
+        f'(the --out folder of `matrix-tracker register`)'
+    )
 
 
 def _row(view, frame, status, message, failure='', result=None, registration='') -> dict:
     """One row of the CSV; ``failure`` names the step that raised ('' when none did)."""
     r = result
-    return {'view': view, 'frame': frame, 'status': status, 'written': False,
-            'rms_px': r.rms_px if r else NAN, 'corners': r.corners if r else 0,
-            'pieces_found': r.pieces_found if r else 0, 'pieces_assigned': r.pieces_assigned if r else 0,
-            'tracked': r.tracked if r else False, 'age_s': r.age_s if r else 0.0,
-            'time_s': r.timings_s.get('total', NAN) if r else NAN, 'rot_err_deg': NAN, 'centre_err_m': NAN,
-            'registration': registration, 'guide': r.motion if r else '', 'failure': failure, 'message': message}
+    return {
+        'view': view,
+        'frame': frame,
+        'status': status,
+        'written': False,
+        'rms_px': r.rms_px if r else NAN,
+        'corners': r.corners if r else 0,
+        'pieces_found': r.pieces_found if r else 0,
+        'pieces_assigned': r.pieces_assigned if r else 0,
+        'tracked': r.tracked if r else False,
+        'age_s': r.age_s if r else 0.0,
+        'time_s': r.timings_s.get('total', NAN) if r else NAN,
+        'rot_err_deg': NAN,
+        'centre_err_m': NAN,
+        'registration': registration,
+        'guide': r.motion if r else '',
+        'failure': failure,
+        'message': message,
+    }
 
 
 def _failure(step: str, exc: Exception) -> str:
@@ -98,8 +138,7 @@ def _registration_of(registrations, view, frame) -> tuple:
     return registration, registration.status + (f': {registration.message}' if not registration.ok else '')
 
 
-def _calibrate_frame(dataset, out, writer, calibrator, view, frame, stamp, registrations, write_stale,
-                     compare) -> dict:
+def _calibrate_frame(dataset, out, writer, calibrator, view, frame, stamp, registrations, write_stale, compare) -> dict:
     """Calibrate, write and measure one frame; a step that raises makes the frame failed (its row says which
     and why) instead of ending the run."""
     step = 'read image'
@@ -130,8 +169,17 @@ def _calibrate_frame(dataset, out, writer, calibrator, view, frame, stamp, regis
     return row
 
 
-def calibrate_dataset(dataset: MatrixDataset, out: Path, settings: CalibSettings, views=(), max_frames=0,
-                      frame_period=0.5, compare=False, registration_dir=None, write_stale=False) -> list:
+def calibrate_dataset(
+    dataset: MatrixDataset,
+    out: Path,
+    settings: CalibSettings,
+    views=(),
+    max_frames=0,
+    frame_period=0.5,
+    compare=False,
+    registration_dir=None,
+    write_stale=False,
+) -> list:
     """Run the calibration over ``dataset``; returns the status rows (also written to the CSV).
     ``registration_dir``: the ``--out`` folder of ``matrix-tracker register`` (see :func:`registration_folder`)
     whose records guide the frames; ``write_stale``: write stale frames' last good poses too."""
@@ -151,8 +199,18 @@ def calibrate_dataset(dataset: MatrixDataset, out: Path, settings: CalibSettings
                 bar.update(len(frames))
                 continue
             for index, frame in enumerate(frames):
-                row = _calibrate_frame(dataset, out, writer, calibrator, view, frame, index * frame_period,
-                                       registrations, write_stale, compare)
+                row = _calibrate_frame(
+                    dataset,
+                    out,
+                    writer,
+                    calibrator,
+                    view,
+                    frame,
+                    index * frame_period,
+                    registrations,
+                    write_stale,
+                    compare,
+                )
                 if row['failure']:
                     tqdm.write(f'{view} frame {frame}: {row["message"]}')
                 rows.append(row)
@@ -176,8 +234,7 @@ def simulated_sequence(variant: str, frames: int, seed: int, out) -> Path:
     """Write ``frames`` frames of simulator ``variant`` to ``out`` (MATRIX format) and return ``out``: the
     sequence ``matrix-tracker simulate`` writes, so that tests and benchmarks calibrate what a user would."""
     out = Path(out)
-    code = cli_main(['simulate', '--config', variant, '--frames', str(frames), '--seed', str(seed),
-                     '--out', str(out)])
+    code = cli_main(['simulate', '--config', variant, '--frames', str(frames), '--seed', str(seed), '--out', str(out)])
     if code != 0:
         raise RuntimeError(f'matrix-tracker simulate {variant} failed with exit code {code}')
     return out
@@ -189,24 +246,39 @@ def run(args) -> int:
     if not isinstance(dataset, MatrixDataset):
         raise DatasetError(f'{args.dataset} is a {dataset.format_name} folder; calibrate needs MATRIX format')
     out = Path(args.out)
-    rows = calibrate_dataset(dataset, out, settings, args.views, args.max_frames, args.frame_period,
-                             args.compare, args.registration, args.write_stale)
+    rows = calibrate_dataset(
+        dataset,
+        out,
+        settings,
+        args.views,
+        args.max_frames,
+        args.frame_period,
+        args.compare,
+        args.registration,
+        args.write_stale,
+    )
     counts = {k: sum(r['status'] == k for r in rows) for k in (OK, STALE, FAILED)}
     raised = sum(bool(r['failure']) for r in rows)
     written = sum(r['written'] for r in rows)
     stale_kept = sum(r['status'] == STALE and not r['written'] for r in rows)
     guided = sum(r['guide'] == 'registration' for r in rows)
-    print(f'{len(rows)} images: {counts}; {raised} raised (step in the CSV\'s "failure"); wrote {written} '
-          f'calibration(s) to {out / "calibrations"}'
-          + (f' ({stale_kept} stale not written: --write-stale writes them)' if stale_kept else '')
-          + (f'; {guided} guided by their registration' if args.registration else '')
-          + f'; table {out / STATUS_FILE}')
+    print(
+        f'{len(rows)} images: {counts}; {raised} raised (step in the CSV\'s "failure"); wrote {written} '
+        f'calibration(s) to {out / "calibrations"}'
+        + (f' ({stale_kept} stale not written: --write-stale writes them)' if stale_kept else '')
+        + (f'; {guided} guided by their registration' if args.registration else '')
+        + f'; table {out / STATUS_FILE}'
+    )
     s = summarize_errors(rows) if args.compare else None
     if s and s['ok']:
-        print(f"vs stored calibration (ok frames): rotation median {s['rot_median_deg']:.3f} deg, "
-              f"max {s['rot_max_deg']:.3f} deg; centre median {s['centre_median_m']:.3f} m, "
-              f"max {s['centre_max_m']:.3f} m")
+        print(
+            f"vs stored calibration (ok frames): rotation median {s['rot_median_deg']:.3f} deg, "
+            f"max {s['rot_max_deg']:.3f} deg; centre median {s['centre_median_m']:.3f} m, "
+            f"max {s['centre_max_m']:.3f} m"
+        )
         for r in rows:
-            print(f"  {r['view']} {r['frame']:04d} {r['status']:6s} rot {r['rot_err_deg']:.3f} deg "
-                  f"centre {r['centre_err_m']:.3f} m  {r['corners']} corners  {r['message']}")
+            print(
+                f"  {r['view']} {r['frame']:04d} {r['status']:6s} rot {r['rot_err_deg']:.3f} deg "
+                f"centre {r['centre_err_m']:.3f} m  {r['corners']} corners  {r['message']}"
+            )
     return 0

@@ -27,16 +27,27 @@ from matrix_core.tracking.settings import TrackerSettings
 def add_parser(subparsers) -> None:
     from matrix_core.bev.calibration_sources import CALIBRATION_SOURCES
 
-    p = subparsers.add_parser('evaluate', help='metrics table + PNGs of a trained BEV model on a dataset',
-                              description=__doc__)
+    p = subparsers.add_parser(
+        'evaluate', help='metrics table + PNGs of a trained BEV model on a dataset', description=__doc__
+    )
     p.add_argument('dataset', help='MATRIX-format folder')
-    p.add_argument('--checkpoint', required=True, help='model checkpoint (.pt) written by train, or the name of '
-                   'one shipped in matrix_core/bev/checkpoints (e.g. detector_seed1.pt)')
+    p.add_argument(
+        '--checkpoint',
+        required=True,
+        help='model checkpoint (.pt) written by train, or the name of '
+        'one shipped in matrix_core/bev/checkpoints (e.g. detector_seed1.pt)',
+    )
     p.add_argument('--frames', type=int, nargs=2, metavar=('FIRST', 'LAST'), help='frame range (inclusive)')
-    p.add_argument('--calibration', default='ground_truth', choices=sorted(CALIBRATION_SOURCES),
-                   help='calibration source per frame (default: ground_truth)')
-    p.add_argument('--calibration-dir', help='output folder of matrix-tracker calibrate (pnp) or register '
-                   '(registration) for those calibration sources')
+    p.add_argument(
+        '--calibration',
+        default='ground_truth',
+        choices=sorted(CALIBRATION_SOURCES),
+        help='calibration source per frame (default: ground_truth)',
+    )
+    p.add_argument(
+        '--calibration-dir',
+        help='output folder of matrix-tracker calibrate (pnp) or register (registration) for those calibration sources',
+    )
     p.add_argument('--drop-views', nargs='*', default=[], help='views to remove at test time, e.g. D2 D6')
     p.add_argument('--score-threshold', type=float, help='override the checkpoint\'s decoding threshold')
     p.add_argument('--out', default='out/evaluate', help='folder for PNGs, text files and metrics.json')
@@ -60,8 +71,9 @@ def run(args) -> int:
     torch.set_num_threads(1)
     overrides = {} if args.score_threshold is None else {'score_threshold': args.score_threshold}
     model, settings = load_model(resolve_checkpoint(args.checkpoint), overrides)
-    probe = BevFrames(args.dataset, settings, calibration=args.calibration, cache_images=False,
-                      calibration_dir=args.calibration_dir)
+    probe = BevFrames(
+        args.dataset, settings, calibration=args.calibration, cache_images=False, calibration_dir=args.calibration_dir
+    )
     unknown = set(args.drop_views) - set(probe.views)
     if unknown:
         raise ValueError(f'--drop-views: unknown views {sorted(unknown)}; views are {probe.views}')
@@ -70,12 +82,20 @@ def run(args) -> int:
     if not frames:
         raise ValueError(f'no frames of {args.dataset} in {args.frames}')
     views = [v for v in probe.views if v not in args.drop_views]
-    data = BevFrames(args.dataset, settings, frames, args.calibration, views, cache_images=False,
-                     calibration_dir=args.calibration_dir)
+    data = BevFrames(
+        args.dataset,
+        settings,
+        frames,
+        args.calibration,
+        views,
+        cache_images=False,
+        calibration_dir=args.calibration_dir,
+    )
     result = evaluate(model, data, settings_from_namespace(TrackerSettings, args))
     # frames the folder has files of but not every view's image and calibration: failed too, not dropped silently
-    result.failed_frames.update({f: f'dataset: {why}' for f, why in probe.dataset.incomplete_frames.items()
-                                 if in_range(f)})
+    result.failed_frames.update(
+        {f: f'dataset: {why}' for f, why in probe.dataset.incomplete_frames.items() if in_range(f)}
+    )
     if not result.outputs:
         raise ValueError(f'no frame could be evaluated:\n{result.failures_text()}')
     print(format_metrics(result.detection, result.tracking))
@@ -87,22 +107,43 @@ def run(args) -> int:
     write_bev_points(out / 'tracks.txt', result.tracks)
     write_bev_points(out / 'ground_truth.txt', result.gt)
     image_plane = _image_plane(args, data, result, views, out)
-    (out / 'metrics.json').write_text(json.dumps({'detection': result.detection.as_dict(),
-                                                  'tracking': result.tracking.as_dict(),
-                                                  'image_plane': image_plane.as_dict(),
-                                                  'calibration': args.calibration, 'views': views,
-                                                  'calibration_dir': args.calibration_dir,
-                                                  'failures': result.failures_dict()}, indent=2))
+    (out / 'metrics.json').write_text(
+        json.dumps(
+            {
+                'detection': result.detection.as_dict(),
+                'tracking': result.tracking.as_dict(),
+                'image_plane': image_plane.as_dict(),
+                'calibration': args.calibration,
+                'views': views,
+                'calibration_dir': args.calibration_dir,
+                'failures': result.failures_dict(),
+            },
+            indent=2,
+        )
+    )
     step = max(len(result.outputs) // max(args.heatmaps, 1), 1)
-    for o in result.outputs[::step][:args.heatmaps]:
+    for o in result.outputs[::step][: args.heatmaps]:
         gt = result.gt.xy[result.gt.frames == o.frame]
-        save_heatmap_png(out / f'heatmap_{o.frame:04d}.png', o.heatmap, data.grid, gt, o.detections.xy,
-                         f'frame {o.frame}: heatmap, ground truth (o), detections (x)')
-    save_trajectories_png(out / 'trajectories.png', result.gt, result.tracks, data.grid,
-                          f'{Path(args.dataset).name}, frames {frames[0]}-{frames[-1]}'
-                          + (f' ({len(result.failed_frames)} failed)' if result.failed_frames else ''))
-    print(f'wrote {out}/: metrics.json, detections.txt, tracks.txt, boxes_2d.txt, trajectories.png, '
-          f'heatmap_*.png, boxes_2d_*.png')
+        save_heatmap_png(
+            out / f'heatmap_{o.frame:04d}.png',
+            o.heatmap,
+            data.grid,
+            gt,
+            o.detections.xy,
+            f'frame {o.frame}: heatmap, ground truth (o), detections (x)',
+        )
+    save_trajectories_png(
+        out / 'trajectories.png',
+        result.gt,
+        result.tracks,
+        data.grid,
+        f'{Path(args.dataset).name}, frames {frames[0]}-{frames[-1]}'
+        + (f' ({len(result.failed_frames)} failed)' if result.failed_frames else ''),
+    )
+    print(
+        f'wrote {out}/: metrics.json, detections.txt, tracks.txt, boxes_2d.txt, trajectories.png, '
+        f'heatmap_*.png, boxes_2d_*.png'
+    )
     return 0
 
 
@@ -113,24 +154,39 @@ def _image_plane(args, data, result, views, out):
 
     camera_of = homography_cameras(data.dataset, data.homography_of)
     scored = result.scored_frames
-    scores = score_image_plane(data.dataset, result.track_detections, _or_none(camera_of), views, scored,
-                               settings_from_namespace(ImageBoxSettings, args), args.iou)
+    scores = score_image_plane(
+        data.dataset,
+        result.track_detections,
+        _or_none(camera_of),
+        views,
+        scored,
+        settings_from_namespace(ImageBoxSettings, args),
+        args.iou,
+    )
     print(f'image plane (2D boxes of the tracks in every drone, IoU >= {args.iou:g}):')
     print(format_view_table(scores.metrics))
     write_mot_boxes(out / 'boxes_2d.txt', scores.pred)
     frame = scored[len(scored) // 2]
     images = {v: image for v in views if (image := _or_none(data.dataset.load_image)(v, frame)) is not None}
-    draw_frame_png(out / f'boxes_2d_{frame:04d}.png', images, scores.pred, scores.gt, frame,
-                   f'frame {frame}: tracks (id, colour) and annotated boxes (white)')
+    draw_frame_png(
+        out / f'boxes_2d_{frame:04d}.png',
+        images,
+        scores.pred,
+        scores.gt,
+        frame,
+        f'frame {frame}: tracks (id, colour) and annotated boxes (white)',
+    )
     return scores
 
 
 def _or_none(fn):
     """``fn(view, frame)``, None where it raises: a view whose camera or image is broken in a frame has no
     boxes or tile there (``evaluate`` already masked and reported it)."""
+
     def call(view, frame):
         try:
             return fn(view, frame)
         except Exception:
             return None
+
     return call

@@ -21,17 +21,24 @@ from pathlib import Path
 
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser('evaluate-recording', help='MODA/MOTA/IDF1... of a recorded live run vs a sequence bag',
-                              description=__doc__)
+    p = subparsers.add_parser(
+        'evaluate-recording', help='MODA/MOTA/IDF1... of a recorded live run vs a sequence bag', description=__doc__
+    )
     p.add_argument('recording', help='recorder bag folder or MOT text file "frame id x y"')
     p.add_argument('--ground-truth', required=True, help='sequence bag with /ground_truth/pedestrians')
     p.add_argument('--tracks-topic', default='/tracks', help='TrackArray topic of the tracks (default: /tracks)')
-    p.add_argument('--detections-topic', default='/detections', help='TrackArray topic of the detections '
-                   '(default: /detections)')
+    p.add_argument(
+        '--detections-topic', default='/detections', help='TrackArray topic of the detections (default: /detections)'
+    )
     p.add_argument('--start-time', type=float, help='stamp of frame 0, seconds (default: the sequence bag\'s)')
     p.add_argument('--frame-period', type=float, help='seconds between frames (default: the sequence bag\'s)')
-    p.add_argument('--area', type=float, nargs=4, metavar=('X0', 'Y0', 'X1', 'Y1'),
-                   help='ground truth outside is ignored (default: the recorded heatmap grid, else none)')
+    p.add_argument(
+        '--area',
+        type=float,
+        nargs=4,
+        metavar=('X0', 'Y0', 'X1', 'Y1'),
+        help='ground truth outside is ignored (default: the recorded heatmap grid, else none)',
+    )
     p.add_argument('--frames', type=int, nargs=2, metavar=('FIRST', 'LAST'), help='frame range (inclusive)')
     p.add_argument('--threshold', type=float, default=0.5, help='detection match distance, m (default: 0.5)')
     p.add_argument('--gate', type=float, default=1.0, help='tracking match distance, m (default: 1.0)')
@@ -53,16 +60,22 @@ def run(args) -> int:
     if args.frame_period is not None and args.frame_period <= 0:
         raise ValueError('--frame-period must be positive')
     clock = read_sequence_clock(args.ground_truth).overridden(args.start_time, args.frame_period)
-    recording = read_recording(args.recording, tracks_topic=args.tracks_topic,
-                               detections_topic=args.detections_topic, clock=clock) \
-        if Path(args.recording).is_dir() else read_recording(args.recording)
+    recording = (
+        read_recording(
+            args.recording, tracks_topic=args.tracks_topic, detections_topic=args.detections_topic, clock=clock
+        )
+        if Path(args.recording).is_dir()
+        else read_recording(args.recording)
+    )
     gt = ground_truth_from_bag(args.ground_truth, clock)
     result = score_recording(recording, gt, args.area, args.frames, args.threshold, args.gate)
     gt_frames = sorted(set(result.gt.frames.tolist()))
     lost = sorted(set(gt_frames) - set(recording.track_frames)) if recording.track_frames is not None else None
-    print(f'recording {args.recording}: detection metrics of the {result.detections_source}; '
-          f'{len(gt_frames)} ground-truth frames' + (f', grid area {tuple(round(v, 3) for v in recording.area)}'
-                                                     if recording.area and args.area is None else ''))
+    print(
+        f'recording {args.recording}: detection metrics of the {result.detections_source}; '
+        f'{len(gt_frames)} ground-truth frames'
+        + (f', grid area {tuple(round(v, 3) for v in recording.area)}' if recording.area and args.area is None else '')
+    )
     print(format_metrics(result.detection, result.tracking))
     if lost is not None:
         print(f'frames without a TrackArray: {lost if lost else "none"}')
@@ -70,19 +83,25 @@ def run(args) -> int:
         _draw(args.png, result, args.area or recording.area, args.recording)
     image_plane = _image_plane(args, clock, recording) if args.dataset else None
     if args.json:
-        Path(args.json).write_text(json.dumps({
-            'detection': result.detection.as_dict(),
-            'tracking': result.tracking.as_dict() if result.tracking else None,
-            'detections_source': result.detections_source, 'frames_without_tracks': lost,
-            'image_plane': image_plane}, indent=2))
+        Path(args.json).write_text(
+            json.dumps(
+                {
+                    'detection': result.detection.as_dict(),
+                    'tracking': result.tracking.as_dict() if result.tracking else None,
+                    'detections_source': result.detections_source,
+                    'frames_without_tracks': lost,
+                    'image_plane': image_plane,
+                },
+                indent=2,
+            )
+        )
     return 0
 
 
 def _image_plane(args, clock, recording) -> dict:
     """Score, print, write and draw the recorded 2D boxes (module docstring); their JSON form."""
     from matrix_core.datasets.open import open_dataset
-    from matrix_core.evaluation.image_plane import (annotated_boxes, draw_frame_png, ids_in_tracks,
-                                                    read_recorded_boxes)
+    from matrix_core.evaluation.image_plane import annotated_boxes, draw_frame_png, ids_in_tracks, read_recorded_boxes
     from matrix_core.metrics.image_boxes import format_view_table, per_view_metrics, write_mot_boxes
 
     if not Path(args.recording).is_dir():
@@ -95,20 +114,27 @@ def _image_plane(args, clock, recording) -> dict:
     gt = annotated_boxes(dataset, [dataset.frames[k] for k in frames], list(dataset.views), frames)
     metrics = per_view_metrics(gt, pred, args.iou)
     same_ids = ids_in_tracks(pred, recording.tracks) if recording.tracks is not None else float('nan')
-    print(f'image plane: recorded detections_2d of {len(set(pred.views.tolist()))} drones vs the annotated boxes '
-          f'of {args.dataset} (IoU >= {args.iou:g}); 2D ids that are /tracks ids of the frame: {100 * same_ids:.2f} %')
+    print(
+        f'image plane: recorded detections_2d of {len(set(pred.views.tolist()))} drones vs the annotated boxes '
+        f'of {args.dataset} (IoU >= {args.iou:g}); 2D ids that are /tracks ids of the frame: {100 * same_ids:.2f} %'
+    )
     print(format_view_table(metrics))
     if args.boxes_2d:
         write_mot_boxes(args.boxes_2d, pred)
     if args.png_2d and frames:
         k = frames[len(frames) // 2]
-        draw_frame_png(args.png_2d, {v: dataset.load_image(v, dataset.frames[k]) for v in dataset.views}, pred, gt, k,
-                       f'live recording, frame {k}: detections_2d (id, colour) and annotated boxes (white)')
+        draw_frame_png(
+            args.png_2d,
+            {v: dataset.load_image(v, dataset.frames[k]) for v in dataset.views},
+            pred,
+            gt,
+            k,
+            f'live recording, frame {k}: detections_2d (id, colour) and annotated boxes (white)',
+        )
         print(f'wrote {args.png_2d}')
     if args.overlays and frames:
         _write_overlays(args, clock, frames[len(frames) // 2])
-    return {'per_drone': {v: m.as_dict() for v, m in metrics.items()}, 'ids_in_tracks': same_ids,
-            'iou': args.iou}
+    return {'per_drone': {v: m.as_dict() for v, m in metrics.items()}, 'ids_in_tracks': same_ids, 'iou': args.iou}
 
 
 def _draw(path, result, area, name) -> None:
@@ -125,8 +151,9 @@ def _draw(path, result, area, name) -> None:
     tracks = result.recording.tracks
     if tracks is None:
         tracks = BevPoints(np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0, np.int64))
-    save_trajectories_png(path, result.gt, tracks, BevGrid(*map(float, area)),
-                          f'live recording {Path(name).name}: tracks vs ground truth')
+    save_trajectories_png(
+        path, result.gt, tracks, BevGrid(*map(float, area)), f'live recording {Path(name).name}: tracks vs ground truth'
+    )
     print(f'wrote {path}')
 
 
@@ -139,5 +166,8 @@ def _write_overlays(args, clock, frame: int) -> None:
     Path(args.overlays).mkdir(parents=True, exist_ok=True)
     for view, image in overlays.items():
         cv2.imwrite(str(Path(args.overlays) / f'overlay_{view}.png'), image)
-    print(f'wrote {len(overlays)} overlay images of frame {frame} to {args.overlays}/'
-          if overlays else f'no overlay images of frame {frame} in {args.recording} (fuse overlay off?)')
+    print(
+        f'wrote {len(overlays)} overlay images of frame {frame} to {args.overlays}/'
+        if overlays
+        else f'no overlay images of frame {frame} in {args.recording} (fuse overlay off?)'
+    )

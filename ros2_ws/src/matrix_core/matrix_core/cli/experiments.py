@@ -16,17 +16,23 @@ smoke test; ``standard`` is the size of docs/RESULTS.md (about 2.5 hours with tw
 def add_parser(subparsers) -> None:
     from matrix_core.experiments.sizes import SIZES
 
-    p = subparsers.add_parser('experiments', help="run the paper's experiments and write docs/RESULTS.md",
-                              description=__doc__)
+    p = subparsers.add_parser(
+        'experiments', help="run the paper's experiments and write docs/RESULTS.md", description=__doc__
+    )
     p.add_argument('--mode', choices=list(SIZES), default='quick', help='run size (default: quick)')
     p.add_argument('--out', default='out/experiments', help='run folder root (the run goes to OUT/MODE)')
     p.add_argument('--report', default='docs/RESULTS.md', help='markdown report to write')
     p.add_argument('--images', help='folder for the PNGs (default: images/results next to the report)')
-    p.add_argument('--metrics', help='folder of the per-step files the report is written from (default: '
-                                     'results/MODE next to the report)')
+    p.add_argument(
+        '--metrics',
+        help='folder of the per-step files the report is written from (default: results/MODE next to the report)',
+    )
     p.add_argument('--threads', type=int, default=1, help='torch threads per step (default 1)')
-    p.add_argument('--jobs', type=int, help="steps run at once, one process each (default: the size's, 2 for "
-                                            'standard and full, 1 for quick)')
+    p.add_argument(
+        '--jobs',
+        type=int,
+        help="steps run at once, one process each (default: the size's, 2 for standard and full, 1 for quick)",
+    )
     p.add_argument('--report-only', action='store_true', help='only rewrite the report from the --metrics folder')
     p.add_argument('--no-progress', action='store_true', help='no progress bars')
     p.set_defaults(func=run)
@@ -46,8 +52,16 @@ def run(args) -> int:
         path = write_report(metrics, args.report, args.images)
         print(f'wrote {path} from {metrics}')
         return 0
-    summary, path = run_experiments(size, args.out, args.report, args.images, args.threads, not args.no_progress,
-                                    jobs=args.jobs, metrics_dir=metrics)
+    summary, path = run_experiments(
+        size,
+        args.out,
+        args.report,
+        args.images,
+        args.threads,
+        not args.no_progress,
+        jobs=args.jobs,
+        metrics_dir=metrics,
+    )
     states = [s['state'] for s in summary['steps'].values()]
     counts = ', '.join(f'{states.count(k)} {k}' for k in sorted(set(states)))
     print(f'{len(states)} steps ({counts}) in {summary["wall_s"] / 60:.1f} min; wrote {path}')

@@ -7,8 +7,9 @@ from matrix_core.datasets.summary import format_summary, summarize
 
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser('info', help='summarise a dataset folder (drones, frames, people, calibration)',
-                              description=__doc__)
+    p = subparsers.add_parser(
+        'info', help='summarise a dataset folder (drones, frames, people, calibration)', description=__doc__
+    )
     p.add_argument('dataset', help='MATRIX, Wildtrack or MultiviewX folder')
     p.add_argument('--json', action='store_true', help='print JSON instead of aligned text')
     p.set_defaults(func=run)

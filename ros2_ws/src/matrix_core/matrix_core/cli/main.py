@@ -9,8 +9,19 @@ import sys
 
 from matrix_core.datasets.types import DatasetError
 
-SUBCOMMANDS = ('info', 'bag', 'track', 'score', 'register', 'train', 'evaluate', 'calibrate', 'simulate',
-               'evaluate-recording', 'experiments')
+SUBCOMMANDS = (
+    'info',
+    'bag',
+    'track',
+    'score',
+    'register',
+    'train',
+    'evaluate',
+    'calibrate',
+    'simulate',
+    'evaluate-recording',
+    'experiments',
+)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -47,8 +58,8 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
-        prog='matrix-tracker',
-        description='Multi-drone multi-view pedestrian detection and tracking: offline tools.')
+        prog='matrix-tracker', description='Multi-drone multi-view pedestrian detection and tracking: offline tools.'
+    )
     sub = parser.add_subparsers(dest='command', metavar='COMMAND', required=True)
     for name in SUBCOMMANDS:
         importlib.import_module(f'matrix_core.cli.{name.replace("-", "_")}').add_parser(sub)

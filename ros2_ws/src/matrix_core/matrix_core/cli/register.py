@@ -42,13 +42,21 @@ from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser('register', help="register each drone's frames to its reference image",
-                              description=__doc__)
-    add_selection_arguments(p, 'register', 'MATRIX folder (real or simulated)',
-                            'output folder (gets a registration/ subfolder)')
-    p.add_argument('--png', type=int, nargs='?', const=1, default=0, metavar='K',
-                   help='overlay PNG of every K-th frame (bare --png: every frame); default: the first frame '
-                        'of each drone only')
+    p = subparsers.add_parser(
+        'register', help="register each drone's frames to its reference image", description=__doc__
+    )
+    add_selection_arguments(
+        p, 'register', 'MATRIX folder (real or simulated)', 'output folder (gets a registration/ subfolder)'
+    )
+    p.add_argument(
+        '--png',
+        type=int,
+        nargs='?',
+        const=1,
+        default=0,
+        metavar='K',
+        help='overlay PNG of every K-th frame (bare --png: every frame); default: the first frame of each drone only',
+    )
     add_settings_arguments(p, RegisterSettings)
     p.set_defaults(func=run)
 
@@ -68,9 +76,17 @@ def _failure(stage: str, exc: Exception) -> str:
 
 def _pair(view, frame, status, message, failure='', error=None, result=None) -> dict:
     """One row of summary.json; ``failure`` names the step that raised ('' when none did)."""
-    return {'view': view, 'frame': frame, 'status': status, 'error_px': error,
-            'confidence': result.confidence if result else None, 'inliers': result.inliers if result else None,
-            'seconds': result.seconds if result else None, 'message': message, 'failure': failure}
+    return {
+        'view': view,
+        'frame': frame,
+        'status': status,
+        'error_px': error,
+        'confidence': result.confidence if result else None,
+        'inliers': result.inliers if result else None,
+        'seconds': result.seconds if result else None,
+        'message': message,
+        'failure': failure,
+    }
 
 
 def _register_frame(args, dataset, settings, view, frame, index, registrar, image, ref_cam, out) -> dict:
@@ -89,17 +105,25 @@ def _register_frame(args, dataset, settings, view, frame, index, registrar, imag
     failure, error = '', None
     if result.ok:
         try:
-            error = homography_error_px(result.ref_H_img, dataset.camera(view, frame), ref_cam, dataset.area,
-                                        settings.exclude_boxes)
+            error = homography_error_px(
+                result.ref_H_img, dataset.camera(view, frame), ref_cam, dataset.area, settings.exclude_boxes
+            )
         except Exception as exc:  # the registration stands; only its check against the calibration failed
             failure = _failure('error vs calibration', exc)
     if index == 0 or (args.png and index % args.png == 0):
-        title = (f'{view} frame {frame}: {result.status}, c {result.confidence:.2f}, {result.inliers} '
-                 f'inliers' + (f', {error:.2f} px vs calibration' if error is not None else
-                               f' ({result.message or failure})'))
+        title = f'{view} frame {frame}: {result.status}, c {result.confidence:.2f}, {result.inliers} inliers' + (
+            f', {error:.2f} px vs calibration' if error is not None else f' ({result.message or failure})'
+        )
         try:
-            write_registration_overlay(out / 'overlay' / name.replace('.json', '.png'), current, image,
-                                       result.ref_H_img, ref_cam, dataset.area, title)
+            write_registration_overlay(
+                out / 'overlay' / name.replace('.json', '.png'),
+                current,
+                image,
+                result.ref_H_img,
+                ref_cam,
+                dataset.area,
+                title,
+            )
         except Exception as exc:  # a picture is not worth the run
             failure = '; '.join(filter(None, [failure, _failure('overlay', exc)]))
     return _pair(view, frame, result.status, result.message, failure, error, result)
@@ -137,15 +161,21 @@ def run(args) -> int:
     errors = np.array([s['error_px'] for s in summary if s['error_px'] is not None])
     seconds = [s['seconds'] for s in summary if s['seconds'] is not None]
     failed = sum(s['status'] != 'ok' for s in summary)
-    stats = {'pairs': len(summary), 'failed': failed, 'raised': sum(bool(s['failure']) for s in summary),
-             'unmeasured': sum(s['status'] == 'ok' and s['error_px'] is None for s in summary),
-             'backend': backend.name,
-             'error_px_median': float(np.median(errors)) if len(errors) else None,
-             'error_px_max': float(np.max(errors)) if len(errors) else None,
-             'seconds_median': float(np.median(seconds)) if seconds else None}
+    stats = {
+        'pairs': len(summary),
+        'failed': failed,
+        'raised': sum(bool(s['failure']) for s in summary),
+        'unmeasured': sum(s['status'] == 'ok' and s['error_px'] is None for s in summary),
+        'backend': backend.name,
+        'error_px_median': float(np.median(errors)) if len(errors) else None,
+        'error_px_max': float(np.max(errors)) if len(errors) else None,
+        'seconds_median': float(np.median(seconds)) if seconds else None,
+    }
     (out / 'summary.json').write_text(json.dumps({'stats': stats, 'pairs': summary}, indent=1))
-    print(f'registered {len(summary) - failed}/{len(summary)} images with {backend.name}; error vs stored '
-          f'calibration: median {stats["error_px_median"]} px, max {stats["error_px_max"]} px '
-          f'({stats["unmeasured"]} registered but not measured); {stats["raised"]} frame(s) raised (reason in '
-          f'summary.json "failure"); median {stats["seconds_median"]} s per image; wrote {out}')
+    print(
+        f'registered {len(summary) - failed}/{len(summary)} images with {backend.name}; error vs stored '
+        f'calibration: median {stats["error_px_median"]} px, max {stats["error_px_max"]} px '
+        f'({stats["unmeasured"]} registered but not measured); {stats["raised"]} frame(s) raised (reason in '
+        f'summary.json "failure"); median {stats["seconds_median"]} s per image; wrote {out}'
+    )
     return 0

@@ -11,12 +11,17 @@ from matrix_core.metrics.report import format_metrics
 
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser('score', help='MODA/MODP/precision/recall and MOTA/MOTP/IDF1/MT/ML of BEV text files',
-                              description=__doc__)
+    p = subparsers.add_parser(
+        'score', help='MODA/MODP/precision/recall and MOTA/MOTP/IDF1/MT/ML of BEV text files', description=__doc__
+    )
     p.add_argument('gt', help='ground truth, lines "frame id x y"')
     p.add_argument('pred', help='tracks "frame id x y" or detections "frame x y [score]"')
-    p.add_argument('--pred-format', choices=('auto', 'tracks', 'detections'), default='auto',
-                   help='how to read PRED; auto: 4 columns with an integer 2nd column are tracks (default: auto)')
+    p.add_argument(
+        '--pred-format',
+        choices=('auto', 'tracks', 'detections'),
+        default='auto',
+        help='how to read PRED; auto: 4 columns with an integer 2nd column are tracks (default: auto)',
+    )
     p.add_argument('--min-score', type=float, default=0.0, help='ignore detections below this score (default: 0)')
     p.add_argument('--threshold', type=float, default=0.5, help='detection match distance in metres (default: 0.5)')
     p.add_argument('--gate', type=float, default=1.0, help='tracking match distance in metres (default: 1.0)')

@@ -5,8 +5,9 @@ from matrix_core.sim.settings import SimulateSettings
 
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser('simulate', help='generate a seeded MATRIX-like scene sequence (and a bag)',
-                              description=__doc__)
+    p = subparsers.add_parser(
+        'simulate', help='generate a seeded MATRIX-like scene sequence (and a bag)', description=__doc__
+    )
     add_settings_arguments(p, SimulateSettings)
     p.set_defaults(func=run)
 
@@ -19,8 +20,10 @@ def run(args) -> int:
     settings = settings_from_namespace(SimulateSettings, args)
     out = simulate(settings)
     summary = json.loads((out / SUMMARY_FILE).read_text())
-    print(f'wrote {summary["frames_written"]} of {settings.frames} frames of {settings.config} (seed {settings.seed}, '
-          f'{settings.width}x{settings.height}) to {out}; {summary["frames_failed"]} failed')
+    print(
+        f'wrote {summary["frames_written"]} of {settings.frames} frames of {settings.config} (seed {settings.seed}, '
+        f'{settings.width}x{settings.height}) to {out}; {summary["frames_failed"]} failed'
+    )
     for f in summary['failed_frames']:
         print(f'  frame {f["frame"]}: {f["reason"]}')
     return 0

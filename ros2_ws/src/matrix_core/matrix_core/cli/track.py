@@ -13,8 +13,9 @@ from matrix_core.tracking import BevDetections, BevTracker, TrackerSettings
 
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser('track', help='track BEV detections ("frame x y score") into "frame id x y"',
-                              description=__doc__)
+    p = subparsers.add_parser(
+        'track', help='track BEV detections ("frame x y score") into "frame id x y"', description=__doc__
+    )
     p.add_argument('detections', help='text file, lines "frame x y [score]"')
     p.add_argument('--out', required=True, help='output text file, lines "frame id x y"')
     add_settings_arguments(p, TrackerSettings)
@@ -40,6 +41,8 @@ def run(args) -> int:
     dets = read_bev_points(args.detections, with_ids=False)
     tracks = track_points(dets, settings_from_namespace(TrackerSettings, args))
     write_bev_points(args.out, tracks)
-    print(f'{len(dets)} detections in {len(dets.frame_numbers)} frames -> {len(tracks)} track points, '
-          f'{len(np.unique(tracks.ids))} tracks: {args.out}')
+    print(
+        f'{len(dets)} detections in {len(dets.frame_numbers)} frames -> {len(tracks)} track points, '
+        f'{len(np.unique(tracks.ids))} tracks: {args.out}'
+    )
     return 0

@@ -7,20 +7,29 @@ weighted per validation sequence) and ``history.json`` (per epoch: losses, each 
 
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser('train', help='train the BEV fusion network (progress bars, checkpoints, resume)',
-                              description=__doc__)
+    p = subparsers.add_parser(
+        'train', help='train the BEV fusion network (progress bars, checkpoints, resume)', description=__doc__
+    )
     p.add_argument('--config', required=True, help='YAML config file or shipped config name')
     p.add_argument('--out', help='output folder (default: out_dir of the config)')
     p.add_argument('--resume', action='store_true', help='continue from OUT/last.pt if it exists')
     p.add_argument('--epochs', type=int, help='override the number of epochs')
     p.add_argument('--max-steps-per-epoch', type=int, help='override max_steps_per_epoch (0: all)')
     p.add_argument('--seed', type=int, help='override the seed')
-    p.add_argument('--export', metavar='PATH', help='after training, write last.pt without the optimizer state '
-                   'to PATH (how the shipped checkpoints/*.pt are made; with --resume on a finished run it '
-                   'only exports)')
-    p.add_argument('--export-from', choices=('last', 'best'), default='last',
-                   help='which checkpoint --export writes: the last epoch, or best.pt (highest validation score '
-                        'val_score: the model-selection protocol of the shipped default, README "Model selection")')
+    p.add_argument(
+        '--export',
+        metavar='PATH',
+        help='after training, write last.pt without the optimizer state '
+        'to PATH (how the shipped checkpoints/*.pt are made; with --resume on a finished run it '
+        'only exports)',
+    )
+    p.add_argument(
+        '--export-from',
+        choices=('last', 'best'),
+        default='last',
+        help='which checkpoint --export writes: the last epoch, or best.pt (highest validation score '
+        'val_score: the model-selection protocol of the shipped default, README "Model selection")',
+    )
     p.set_defaults(func=run)
 
 
@@ -30,8 +39,11 @@ def run(args) -> int:
     from matrix_core.bev.config import CONFIG_DIR, load_config, resolve_config_path
     from matrix_core.bev.training import train
 
-    overrides = {k: v for k, v in (('epochs', args.epochs), ('max_steps_per_epoch', args.max_steps_per_epoch),
-                                   ('seed', args.seed)) if v is not None}
+    overrides = {
+        k: v
+        for k, v in (('epochs', args.epochs), ('max_steps_per_epoch', args.max_steps_per_epoch), ('seed', args.seed))
+        if v is not None
+    }
     config = load_config(args.config, overrides)
     history = train(config, args.out, resume=args.resume)
     out = Path(args.out or config.out_dir)
@@ -44,10 +56,13 @@ def run(args) -> int:
         cfg = resolve_config_path(args.config)
         source = out / f'{args.export_from}.pt'
         if not source.is_file():
-            raise FileNotFoundError(f'--export-from {args.export_from}: {source} was not written '
-                                    '(best.pt needs validation sequences in the config)')
+            raise FileNotFoundError(
+                f'--export-from {args.export_from}: {source} was not written '
+                '(best.pt needs validation sequences in the config)'
+            )
         recipe = f'configs/{cfg.name}' if cfg.parent == CONFIG_DIR else str(cfg)
-        path = export_checkpoint(source, args.export, trained_with=f'{recipe} --seed {config.seed} '
-                                 f'({args.export_from}.pt)')
+        path = export_checkpoint(
+            source, args.export, trained_with=f'{recipe} --seed {config.seed} ({args.export_from}.pt)'
+        )
         print(f'exported {path} ({path.stat().st_size / 1e6:.1f} MB)')
     return 0

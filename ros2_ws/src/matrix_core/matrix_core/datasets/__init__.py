@@ -7,5 +7,15 @@ from matrix_core.datasets.open import open_dataset
 from matrix_core.datasets.static_rig import MultiviewXDataset, WildtrackDataset
 from matrix_core.datasets.types import BoundingBox, DatasetError, PersonAnnotation, PlaneCorrespondences
 
-__all__ = ['MultiviewDataset', 'MatrixDataset', 'MatrixWriter', 'open_dataset', 'WildtrackDataset',
-           'MultiviewXDataset', 'BoundingBox', 'DatasetError', 'PersonAnnotation', 'PlaneCorrespondences']
+__all__ = [
+    'MultiviewDataset',
+    'MatrixDataset',
+    'MatrixWriter',
+    'open_dataset',
+    'WildtrackDataset',
+    'MultiviewXDataset',
+    'BoundingBox',
+    'DatasetError',
+    'PersonAnnotation',
+    'PlaneCorrespondences',
+]

@@ -79,7 +79,7 @@ class MultiviewDataset(ABC):
 
     def select_frames(self, max_frames: int = 0) -> list:
         """The first ``max_frames`` frames (all when 0)."""
-        return list(self.frames)[:max_frames or None]
+        return list(self.frames)[: max_frames or None]
 
     @abstractmethod
     def image_path(self, view: str, frame: int) -> Path:

@@ -185,7 +185,7 @@ def view_name(drone_number: int) -> str:
     return f'D{drone_number}'
 
 
-MATRIX_VIEWS = tuple(view_name(n) for n in range(1, 9))   # the eight drones of the MATRIX scenes
+MATRIX_VIEWS = tuple(view_name(n) for n in range(1, 9))  # the eight drones of the MATRIX scenes
 
 
 def drone_number(view: str) -> int:

@@ -11,8 +11,14 @@ from pathlib import Path
 import numpy as np
 
 from matrix_core.datasets import matrix_conventions as conv
-from matrix_core.datasets.base import (IMAGE_EXTENSIONS, MultiviewDataset, find_image, image_size, numbered_stems,
-                                      read_image)
+from matrix_core.datasets.base import (
+    IMAGE_EXTENSIONS,
+    MultiviewDataset,
+    find_image,
+    image_size,
+    numbered_stems,
+    read_image,
+)
 from matrix_core.datasets.opencv_xml import read_matrices
 from matrix_core.datasets.types import BoundingBox, DatasetError, PersonAnnotation, PlaneCorrespondences
 from matrix_core.geometry.camera import Camera
@@ -66,8 +72,11 @@ class MatrixDataset(MultiviewDataset):
 
     @cached_property
     def views(self) -> tuple:
-        drones = sorted(int(p.name[1:]) for p in (self.root / 'image_subsets').iterdir()
-                        if p.is_dir() and p.name.startswith('D') and p.name[1:].isdigit())
+        drones = sorted(
+            int(p.name[1:])
+            for p in (self.root / 'image_subsets').iterdir()
+            if p.is_dir() and p.name.startswith('D') and p.name[1:].isdigit()
+        )
         if not drones:
             raise DatasetError(f'{self.root}/image_subsets has no D1..DN folders')
         return tuple(conv.view_name(d) for d in drones)
@@ -77,11 +86,16 @@ class MatrixDataset(MultiviewDataset):
         ``TTTT`` (4 digits, zero-padded: the name every reader of the format looks up)."""
         folder = self.root / 'image_subsets' / view
         frames = numbered_stems(folder)
-        misnamed = sorted(p.name for p in folder.iterdir() if p.stem.isdigit() and p.stem != f'{int(p.stem):04d}'
-                          and p.suffix.lower() in IMAGE_EXTENSIONS)
+        misnamed = sorted(
+            p.name
+            for p in folder.iterdir()
+            if p.stem.isdigit() and p.stem != f'{int(p.stem):04d}' and p.suffix.lower() in IMAGE_EXTENSIONS
+        )
         if misnamed:
-            raise DatasetError(f'{folder}: image files must be named by their frame as TTTT (e.g. 0012.png); '
-                               f'misnamed: {", ".join(misnamed[:5])}')
+            raise DatasetError(
+                f'{folder}: image files must be named by their frame as TTTT (e.g. 0012.png); '
+                f'misnamed: {", ".join(misnamed[:5])}'
+            )
         return set(frames)
 
     @cached_property
@@ -104,8 +118,11 @@ class MatrixDataset(MultiviewDataset):
             have[view] = (images, calibrated)
         out = {}
         for frame in sorted(set().union(*(a | b for a, b in have.values())) - set(self.frames)):
-            lacking = [f'{v} {"/".join(w for w, s in (("image", a), ("calibration", b)) if frame not in s)}'
-                       for v, (a, b) in have.items() if frame not in a or frame not in b]
+            lacking = [
+                f'{v} {"/".join(w for w, s in (("image", a), ("calibration", b)) if frame not in s)}'
+                for v, (a, b) in have.items()
+                if frame not in a or frame not in b
+            ]
             out[frame] = 'no ' + ', '.join(lacking)
         return out
 
@@ -138,12 +155,14 @@ class MatrixDataset(MultiviewDataset):
     # ----- calibration -----------------------------------------------------------------------------
     def _camera_from(self, folder: Path, view: str, frame: int, size: tuple) -> Camera:
         d = conv.drone_number(view)
-        intr = read_matrices(folder / 'intrinsic' / f'intr_Drone{d}_{frame:04d}.xml',
-                             ['camera_matrix', 'distortion_coefficients'])
+        intr = read_matrices(
+            folder / 'intrinsic' / f'intr_Drone{d}_{frame:04d}.xml', ['camera_matrix', 'distortion_coefficients']
+        )
         extr = read_matrices(folder / 'extrinsic' / f'extr_Drone{d}_{frame:04d}.xml', ['rvec', 'tvec'])
         try:
-            return conv.camera_from_file(intr['camera_matrix'], intr['distortion_coefficients'],
-                                         extr['rvec'], extr['tvec'], *size)
+            return conv.camera_from_file(
+                intr['camera_matrix'], intr['distortion_coefficients'], extr['rvec'], extr['tvec'], *size
+            )
         except ValueError as exc:
             raise DatasetError(f'{folder}: bad calibration of {view} frame {frame}: {exc}') from exc
 
@@ -240,5 +259,8 @@ class MatrixDataset(MultiviewDataset):
         table = _read_table(path, 4)
         keep = [i for i, mid in enumerate(table[:, 1].astype(np.int64)) if int(mid) in self.plane_markers]
         ids = table[keep, 1].astype(np.int64)
-        return PlaneCorrespondences(ids, conv.pixels_from_file(table[keep, 2:4]).reshape(-1, 2),
-                                    np.array([self.plane_markers[int(i)] for i in ids]).reshape(-1, 3))
+        return PlaneCorrespondences(
+            ids,
+            conv.pixels_from_file(table[keep, 2:4]).reshape(-1, 2),
+            np.array([self.plane_markers[int(i)] for i in ids]).reshape(-1, 3),
+        )

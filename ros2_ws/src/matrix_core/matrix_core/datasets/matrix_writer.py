@@ -54,8 +54,9 @@ class MatrixWriter:
         base = (self.root / 'reference' if reference else self.root) / 'calibrations'
         vals = conv.camera_to_file(camera)
         name = f'Drone{conv.drone_number(view)}_{frame:04d}.xml'
-        write_matrices(base / 'intrinsic' / f'intr_{name}',
-                       {k: vals[k] for k in ('camera_matrix', 'distortion_coefficients')})
+        write_matrices(
+            base / 'intrinsic' / f'intr_{name}', {k: vals[k] for k in ('camera_matrix', 'distortion_coefficients')}
+        )
         write_matrices(base / 'extrinsic' / f'extr_{name}', {k: vals[k] for k in ('rvec', 'tvec')})
 
     def write_annotations(self, frame: int, persons, views) -> None:
@@ -70,11 +71,9 @@ class MatrixWriter:
             view_entries = []
             for view in views:
                 box = p.boxes.get(view)
-                fields = conv.INVISIBLE_BOX if box is None else conv.box_to_file(
-                    box.xmin, box.ymin, box.xmax, box.ymax)
+                fields = conv.INVISIBLE_BOX if box is None else conv.box_to_file(box.xmin, box.ymin, box.xmax, box.ymax)
                 view_entries.append({'viewNum': conv.drone_number(view) - 1, **fields})
-            entries.append({'personID': int(p.person_id), 'positionID': int(p.position_id),
-                            'views': view_entries})
+            entries.append({'personID': int(p.person_id), 'positionID': int(p.position_id), 'views': view_entries})
         path = self.root / 'annotations_positions' / f'{frame:04d}.json'
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(entries, indent=4) + '\n')
@@ -89,8 +88,11 @@ class MatrixWriter:
 
     def write_pedestrians(self, frame: int, positions: dict) -> None:
         """Write ``matchings/Pedestrians/3d_TTTT.txt`` from person id -> (3,) world metres."""
-        _write_table(self.root / 'matchings/Pedestrians' / f'3d_{frame:04d}.txt',
-                     self._pedestrian_rows(positions), '%d %d %f %f %f')
+        _write_table(
+            self.root / 'matchings/Pedestrians' / f'3d_{frame:04d}.txt',
+            self._pedestrian_rows(positions),
+            '%d %d %f %f %f',
+        )
 
     def write_line_of_sight(self, view: str, frame: int, positions: dict) -> None:
         """Write ``LoS/DroneN_3d_TTTT.txt``: the persons (id -> (3,) world metres) ``view`` sees."""
@@ -101,8 +103,7 @@ class MatrixWriter:
         """Write ``matchings/Planes/3d.txt`` from marker id -> (3,) world metres."""
         ids = sorted(markers)
         xyz = conv.planes_3d_to_file(np.array([markers[i] for i in ids]).reshape(-1, 3))
-        _write_table(self.root / 'matchings/Planes/3d.txt', [(0, i, *p) for i, p in zip(ids, xyz)],
-                     '%d %d %f %f %f')
+        _write_table(self.root / 'matchings/Planes/3d.txt', [(0, i, *p) for i, p in zip(ids, xyz)], '%d %d %f %f %f')
 
     def write_plane_points(self, view: str, frame: int, marker_ids, image_uv) -> None:
         """Write ``matchings/Planes/CameraN_2d_TTTT.txt``: (N,) ids and (N, 2) internal pixels."""

@@ -28,4 +28,5 @@ def open_dataset(path):
     raise DatasetError(
         f'{root} is not a MATRIX, Wildtrack or MultiviewX folder: expected image_subsets/ + '
         f'calibrations/intrinsic/ (MATRIX), Image_subsets/ + calibrations/intrinsic_zero/ (Wildtrack) or '
-        f'Image_subsets/ + calibrations/intrinsic/ (MultiviewX); found {sorted(names)[:12]}')
+        f'Image_subsets/ + calibrations/intrinsic/ (MultiviewX); found {sorted(names)[:12]}'
+    )

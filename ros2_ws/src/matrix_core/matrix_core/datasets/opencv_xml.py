@@ -21,7 +21,7 @@ def read_matrices(path: Path, names, optional=()) -> dict:
     try:
         fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
     except (cv2.error, SystemError) as exc:  # truncated or malformed XML: OpenCV's parser raises in the constructor
-        why = str(exc.__cause__ or exc).strip().split('error: ')[-1]   # cv2.error wrapped in a SystemError
+        why = str(exc.__cause__ or exc).strip().split('error: ')[-1]  # cv2.error wrapped in a SystemError
         raise DatasetError(f'cannot parse calibration file {path}: {why}') from None
     try:
         if not fs.isOpened():

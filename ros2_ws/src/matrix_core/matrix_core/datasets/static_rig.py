@@ -82,8 +82,11 @@ class StaticRigDataset(MultiviewDataset):
 
     @cached_property
     def views(self) -> tuple:
-        present = tuple(f'C{i + 1}' for i in range(len(self.FORMAT.camera_files))
-                        if (self.root / 'Image_subsets' / f'C{i + 1}').is_dir())
+        present = tuple(
+            f'C{i + 1}'
+            for i in range(len(self.FORMAT.camera_files))
+            if (self.root / 'Image_subsets' / f'C{i + 1}').is_dir()
+        )
         if not present:
             raise DatasetError(f'{self.root}/Image_subsets has no C1..CN folders')
         return present
@@ -123,16 +126,23 @@ class StaticRigDataset(MultiviewDataset):
     def _read_camera(self, stem: str) -> Camera:
         """The internal camera of calibration ``stem`` (e.g. 'Camera1'), checked to face the area."""
         f = self.FORMAT
-        intr = read_matrices(self.root / 'calibrations' / f.intrinsic_dir / f'intr_{stem}.xml', ['camera_matrix'],
-                             optional=['distortion_coefficients'])
+        intr = read_matrices(
+            self.root / 'calibrations' / f.intrinsic_dir / f'intr_{stem}.xml',
+            ['camera_matrix'],
+            optional=['distortion_coefficients'],
+        )
         extr = read_matrices(self.root / 'calibrations/extrinsic' / f'extr_{stem}.xml', ['rvec', 'tvec'])
         R, _ = cv2.Rodrigues(extr['rvec'].reshape(3, 1))
         t = extr['tvec'].reshape(3) * f.metres_per_unit
         if f.left_handed:
             R, t = -R @ _MIRROR_Y, -t
         try:
-            cam = Camera(intr['camera_matrix'], pose_matrix(R, t), *self.image_size,
-                         intr.get('distortion_coefficients', np.zeros(5)))
+            cam = Camera(
+                intr['camera_matrix'],
+                pose_matrix(R, t),
+                *self.image_size,
+                intr.get('distortion_coefficients', np.zeros(5)),
+            )
         except ValueError as exc:
             raise DatasetError(f'{self.root}: bad calibration {stem}: {exc}') from exc
         x0, y0, x1, y1 = self.area
@@ -140,8 +150,10 @@ class StaticRigDataset(MultiviewDataset):
             # A calibration in the other handedness still gives the right pixels through cv2.projectPoints,
             # but every point behind the camera here: say so instead of reading nonsense.
             hand = 'left' if f.left_handed else 'right'
-            raise DatasetError(f'{self.root}: calibration {stem} puts the centre of the area {self.area} behind '
-                               f'the camera: not a {self.format_name} calibration ({hand}-handed world)')
+            raise DatasetError(
+                f'{self.root}: calibration {stem} puts the centre of the area {self.area} behind '
+                f'the camera: not a {self.format_name} calibration ({hand}-handed world)'
+            )
         return cam
 
     def position_to_world(self, position_id: int) -> np.ndarray:
@@ -183,8 +195,15 @@ class WildtrackDataset(StaticRigDataset):
     format_name = 'wildtrack'
     FORMAT = RigFormat(
         camera_files=('CVLab1', 'CVLab2', 'CVLab3', 'CVLab4', 'IDIAP1', 'IDIAP2', 'IDIAP3'),
-        intrinsic_dir='intrinsic_zero', metres_per_unit=0.01, grid_cols=480, grid_rows=1440,
-        grid_cell_m=0.025, grid_origin_m=(-3.0, -9.0), frame_digits=8, annotation_digits=8)
+        intrinsic_dir='intrinsic_zero',
+        metres_per_unit=0.01,
+        grid_cols=480,
+        grid_rows=1440,
+        grid_cell_m=0.025,
+        grid_origin_m=(-3.0, -9.0),
+        frame_digits=8,
+        annotation_digits=8,
+    )
 
 
 class MultiviewXDataset(StaticRigDataset):
@@ -193,6 +212,14 @@ class MultiviewXDataset(StaticRigDataset):
 
     format_name = 'multiviewx'
     FORMAT = RigFormat(
-        camera_files=tuple(f'Camera{i}' for i in range(1, 7)), intrinsic_dir='intrinsic',
-        metres_per_unit=1.0, grid_cols=1000, grid_rows=640, grid_cell_m=0.025, grid_origin_m=(0.0, 0.0),
-        frame_digits=4, annotation_digits=5, left_handed=True)
+        camera_files=tuple(f'Camera{i}' for i in range(1, 7)),
+        intrinsic_dir='intrinsic',
+        metres_per_unit=1.0,
+        grid_cols=1000,
+        grid_rows=640,
+        grid_cell_m=0.025,
+        grid_origin_m=(0.0, 0.0),
+        frame_digits=4,
+        annotation_digits=5,
+        left_handed=True,
+    )

@@ -18,6 +18,7 @@ def summarize(ds: MultiviewDataset) -> dict:
     frames = ds.frames
     if not frames:
         from matrix_core.datasets.types import DatasetError
+
         raise DatasetError(f'{ds.root}: no frame has an image for every view')
     heights, dists, tilts = [], [], []
     x0, y0, x1, y1 = ds.area

@@ -41,8 +41,16 @@ def ground_homography_error_m(ground_H_img: np.ndarray, truth: Camera, area, ste
     return float(np.mean(np.linalg.norm(est - world, axis=1)))
 
 
-def score_view_frame(view: str, stamp: float, truth: Camera, area, estimated: Camera = None,
-                     reg_status: str = None, reg_confidence: float = None, ground_H_img=None) -> ViewFrameScore:
+def score_view_frame(
+    view: str,
+    stamp: float,
+    truth: Camera,
+    area,
+    estimated: Camera = None,
+    reg_status: str = None,
+    reg_confidence: float = None,
+    ground_H_img=None,
+) -> ViewFrameScore:
     """Score what was published for ``view`` at ``stamp`` against the ``truth`` camera."""
     score = ViewFrameScore(view, stamp, reg_status=reg_status, reg_confidence=reg_confidence)
     if estimated is not None:
@@ -59,27 +67,36 @@ def _median(values) -> str:
 
 def summary_table(scores: list, views: list) -> str:
     """Plain-text table: one row per view and an 'all' row."""
-    header = (f'{"view":>5} {"frames":>6} {"calib":>5} {"rot_deg":>8} {"centre_m":>8} '
-              f'{"reg_ok":>6} {"conf":>6} {"ground_m":>8}')
+    header = (
+        f'{"view":>5} {"frames":>6} {"calib":>5} {"rot_deg":>8} {"centre_m":>8} '
+        f'{"reg_ok":>6} {"conf":>6} {"ground_m":>8}'
+    )
     lines = [header, '-' * len(header)]
     for name, rows in [(v, [s for s in scores if s.view == v]) for v in views] + [('all', scores)]:
         lines.append(
             f'{name:>5} {len(rows):>6} {sum(s.rot_err_deg is not None for s in rows):>5} '
             f'{_median([s.rot_err_deg for s in rows]):>8} {_median([s.centre_err_m for s in rows]):>8} '
             f'{sum(s.reg_status == "ok" for s in rows):>6} {_median([s.reg_confidence for s in rows]):>6} '
-            f'{_median([s.reg_ground_err_m for s in rows]):>8}')
-    lines.append('rot_deg, centre_m: median calibration error vs ground truth; ground_m: median mean ground '
-                 'error of the registration homography (image -> ground), metres')
+            f'{_median([s.reg_ground_err_m for s in rows]):>8}'
+        )
+    lines.append(
+        'rot_deg, centre_m: median calibration error vs ground truth; ground_m: median mean ground '
+        'error of the registration homography (image -> ground), metres'
+    )
     return '\n'.join(lines)
 
 
 def _area_outline(area, n: int = 40) -> np.ndarray:
     x0, y0, x1, y1 = area
     t = np.linspace(0, 1, n)
-    return np.concatenate([np.column_stack([x0 + (x1 - x0) * t, np.full(n, y0)]),
-                           np.column_stack([np.full(n, x1), y0 + (y1 - y0) * t]),
-                           np.column_stack([x1 - (x1 - x0) * t, np.full(n, y1)]),
-                           np.column_stack([np.full(n, x0), y1 - (y1 - y0) * t])])
+    return np.concatenate(
+        [
+            np.column_stack([x0 + (x1 - x0) * t, np.full(n, y0)]),
+            np.column_stack([np.full(n, x1), y0 + (y1 - y0) * t]),
+            np.column_stack([x1 - (x1 - x0) * t, np.full(n, y1)]),
+            np.column_stack([np.full(n, x0), y1 - (y1 - y0) * t]),
+        ]
+    )
 
 
 def _draw_polyline(image, uv, colour, scale, thickness=2):
@@ -89,8 +106,9 @@ def _draw_polyline(image, uv, colour, scale, thickness=2):
         cv2.polylines(image, [pts], True, colour, thickness, cv2.LINE_AA)
 
 
-def overview_image(images: dict, truth: dict, area, estimated: dict = None, ground_H_img: dict = None,
-                   thumb_width: int = 640) -> np.ndarray:
+def overview_image(
+    images: dict, truth: dict, area, estimated: dict = None, ground_H_img: dict = None, thumb_width: int = 640
+) -> np.ndarray:
     """Grid of thumbnails (BGR uint8), one per view, with the scene area's outline projected by the true
     calibration (white), the published calibration (green) and the registration homography (magenta).
 
@@ -115,22 +133,32 @@ def overview_image(images: dict, truth: dict, area, estimated: dict = None, grou
     cols = min(4, len(tiles))
     while len(tiles) % cols:
         tiles.append(np.zeros_like(tiles[0]))
-    rows = [np.concatenate(tiles[i:i + cols], axis=1) for i in range(0, len(tiles), cols)]
+    rows = [np.concatenate(tiles[i : i + cols], axis=1) for i in range(0, len(tiles), cols)]
     return np.concatenate(rows, axis=0)
 
 
-def score_registration(view: str, stamp: float, truth: Camera, area, estimated: Camera = None,
-                       registration=None) -> ViewFrameScore:
+def score_registration(
+    view: str, stamp: float, truth: Camera, area, estimated: Camera = None, registration=None
+) -> ViewFrameScore:
     """:func:`score_view_frame` of a :class:`~matrix_core.register.registration.Registration` (or None)."""
     if registration is None:
         return score_view_frame(view, stamp, truth, area, estimated)
     status = 'ok' if registration.ok else f'{registration.status}: {registration.message}'
-    return score_view_frame(view, stamp, truth, area, estimated, status, registration.confidence,
-                            registration.ground_H_img if registration.ok else None)
+    return score_view_frame(
+        view,
+        stamp,
+        truth,
+        area,
+        estimated,
+        status,
+        registration.confidence,
+        registration.ground_H_img if registration.ok else None,
+    )
 
 
-def write_graph_report(out_dir, views: list, area, truth: dict, estimated: dict, registrations: dict,
-                       images: dict) -> int:
+def write_graph_report(
+    out_dir, views: list, area, truth: dict, estimated: dict, registrations: dict, images: dict
+) -> int:
     """Score every (view, stamp) of ``truth`` and write ``graph_summary.txt`` (also printed),
     ``graph_scores.csv`` and ``graph_overview.png`` (the last stamp with images) to ``out_dir``.
 
@@ -141,8 +169,10 @@ def write_graph_report(out_dir, views: list, area, truth: dict, estimated: dict,
     Returns:
         How many (view, stamp) pairs were scored.
     """
-    scores = [score_registration(key[0], key[1], cam, area, estimated.get(key), registrations.get(key))
-              for key, cam in sorted(truth.items(), key=lambda kv: (kv[0][1], kv[0][0]))]
+    scores = [
+        score_registration(key[0], key[1], cam, area, estimated.get(key), registrations.get(key))
+        for key, cam in sorted(truth.items(), key=lambda kv: (kv[0][1], kv[0][0]))
+    ]
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     table = summary_table(scores, views)
@@ -158,9 +188,17 @@ def write_graph_report(out_dir, views: list, area, truth: dict, estimated: dict,
     keys = [(v, last) for v in views if (v, last) in images and (v, last) in truth]
     if keys:
         ok_h = {k[0]: registrations[k].ground_H_img for k in keys if k in registrations and registrations[k].ok}
-        picture = overview_image({k[0]: images[k] for k in keys}, {k[0]: truth[k] for k in keys},
-                                 area, {k[0]: estimated[k] for k in keys if k in estimated}, ok_h)
+        picture = overview_image(
+            {k[0]: images[k] for k in keys},
+            {k[0]: truth[k] for k in keys},
+            area,
+            {k[0]: estimated[k] for k in keys if k in estimated},
+            ok_h,
+        )
         cv2.imwrite(str(out / 'graph_overview.png'), picture)
-        print(f'picture: {out / "graph_overview.png"} (white: true calibration, green: published '
-              f'calibration, magenta: registration homography)', flush=True)
+        print(
+            f'picture: {out / "graph_overview.png"} (white: true calibration, green: published '
+            f'calibration, magenta: registration homography)',
+            flush=True,
+        )
     return len(scores)

@@ -15,8 +15,14 @@ from rosbags.highlevel import AnyReader
 from matrix_core import topics
 from matrix_core.bags.messages import stamp_ns
 
-from matrix_core.fusion.image_boxes import (ImageBoxSettings, camera_from_ground_homography, clip_box,
-                                            draw_image_boxes, image_boxes, obstacles_from_meta)
+from matrix_core.fusion.image_boxes import (
+    ImageBoxSettings,
+    camera_from_ground_homography,
+    clip_box,
+    draw_image_boxes,
+    image_boxes,
+    obstacles_from_meta,
+)
 from matrix_core.message_fields import image_from_msg
 from matrix_core.metrics.image_boxes import FrameBoxes, per_view_metrics
 
@@ -50,15 +56,26 @@ def reference_intrinsics(dataset, view: str, frame: int) -> np.ndarray:
 def homography_cameras(dataset, homography_of):
     """``camera_of(view, frame)``: the camera implied by ``homography_of``'s (img_H_ground, (w, h))
     (``bev.calibration_sources``) with the view's :func:`reference_intrinsics`; None where it has none."""
+
     def camera_of(view, frame):
         h = homography_of(view, frame)
-        return None if h is None else camera_from_ground_homography(h[0], reference_intrinsics(dataset, view, frame),
-                                                                    h[1])
+        return (
+            None if h is None else camera_from_ground_homography(h[0], reference_intrinsics(dataset, view, frame), h[1])
+        )
+
     return camera_of
 
 
-def score_image_plane(dataset, tracks, camera_of, views, frames, settings: ImageBoxSettings = None,
-                      iou_threshold: float = 0.5, frame_numbers=None) -> ImagePlaneScores:
+def score_image_plane(
+    dataset,
+    tracks,
+    camera_of,
+    views,
+    frames,
+    settings: ImageBoxSettings = None,
+    iou_threshold: float = 0.5,
+    frame_numbers=None,
+) -> ImagePlaneScores:
     """Boxes of ``tracks`` (BevPoints, frames numbered like ``frame_numbers``, default the dataset frames
     ``frames``) against the annotated boxes of ``frames`` in ``views``; the dataset's obstacles."""
     settings = scene_box_settings(dataset, settings)
@@ -73,8 +90,11 @@ def read_recorded_boxes(path, clock) -> FrameBoxes:
 
     rows = ([], [], [], [], [])
     with AnyReader([Path(path)]) as reader:
-        conns = [c for c in reader.connections if c.msgtype == topics.DETECTION_2D_ARRAY_TYPE
-                 and c.topic.endswith('/' + topics.DETECTIONS_2D)]
+        conns = [
+            c
+            for c in reader.connections
+            if c.msgtype == topics.DETECTION_2D_ARRAY_TYPE and c.topic.endswith('/' + topics.DETECTIONS_2D)
+        ]
         for conn, _, raw in reader.messages(connections=conns):
             msg = reader.deserialize(raw, conn.msgtype)
             frame, view = clock.frame_ns(stamp_ns(msg.header)), conn.topic.split('/')[-2]
@@ -114,8 +134,15 @@ def annotated_boxes(dataset, frames, views, frame_numbers=None) -> FrameBoxes:
         for person in dataset.annotations(f):
             for v, b in person.boxes.items():
                 if v in views:
-                    for col, val in zip(rows, ((frame_numbers or frames)[k], v, person.person_id,
-                                               clip_box([b.xmin, b.ymin, b.xmax, b.ymax], w, h))):
+                    for col, val in zip(
+                        rows,
+                        (
+                            (frame_numbers or frames)[k],
+                            v,
+                            person.person_id,
+                            clip_box([b.xmin, b.ymin, b.xmax, b.ymax], w, h),
+                        ),
+                    ):
                         col.append(val)
     return FrameBoxes(rows[0], rows[1], rows[2], np.reshape(rows[3], (-1, 4)))
 
@@ -131,8 +158,15 @@ def predicted_boxes(tracks, camera_of, views, settings: ImageBoxSettings) -> Fra
                 continue
             found = image_boxes(camera, tracks.ids[rows], tracks.xy[rows], tracks.scores[rows], settings)
             if found:
-                parts.append(FrameBoxes([f] * len(found), [v] * len(found), [b.track_id for b in found],
-                                        np.array([b.box for b in found]), [b.score for b in found]))
+                parts.append(
+                    FrameBoxes(
+                        [f] * len(found),
+                        [v] * len(found),
+                        [b.track_id for b in found],
+                        np.array([b.box for b in found]),
+                        [b.score for b in found],
+                    )
+                )
     return FrameBoxes.concatenate(parts)
 
 
@@ -143,8 +177,9 @@ def draw_frame_png(path, images: dict, pred: FrameBoxes, gt: FrameBoxes, frame: 
     for v, image in images.items():
         img = image.copy()
         for b in gt.boxes[(gt.frames == frame) & (gt.views == v)]:
-            cv2.rectangle(img, tuple(int(round(c)) for c in b[:2]), tuple(int(round(c)) for c in b[2:]),
-                          (255, 255, 255), 2)
+            cv2.rectangle(
+                img, tuple(int(round(c)) for c in b[:2]), tuple(int(round(c)) for c in b[2:]), (255, 255, 255), 2
+            )
         sel = (pred.frames == frame) & (pred.views == v)
         img = draw_image_boxes(img, pred.boxes[sel], pred.ids[sel])
         cv2.putText(img, f'{v} frame {frame}', (20, 60), cv2.FONT_HERSHEY_SIMPLEX, 2.0, (0, 255, 255), 5)
@@ -154,7 +189,7 @@ def draw_frame_png(path, images: dict, pred: FrameBoxes, gt: FrameBoxes, frame: 
     cols = min(4, len(tiles))
     blank = np.zeros_like(tiles[0])
     tiles += [blank] * (-len(tiles) % cols)
-    mosaic = np.vstack([np.hstack(tiles[r:r + cols]) for r in range(0, len(tiles), cols)])
+    mosaic = np.vstack([np.hstack(tiles[r : r + cols]) for r in range(0, len(tiles), cols)])
     if title:
         bar = np.zeros((50, mosaic.shape[1], 3), np.uint8)
         cv2.putText(bar, title, (10, 35), cv2.FONT_HERSHEY_SIMPLEX, 1.0, (255, 255, 255), 2)

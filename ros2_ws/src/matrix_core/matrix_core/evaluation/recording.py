@@ -39,15 +39,16 @@ class Recording:
 
 @dataclass
 class RecordingScores:
-    detection: object        # DetectionMetrics (of the detections, else of the tracks)
-    tracking: object         # TrackingMetrics, or None without tracks
-    detections_source: str   # 'detections' or 'tracks'
+    detection: object  # DetectionMetrics (of the detections, else of the tracks)
+    tracking: object  # TrackingMetrics, or None without tracks
+    detections_source: str  # 'detections' or 'tracks'
     gt: BevPoints
     recording: Recording
 
 
-def read_recording_bag(path, tracks_topic='/tracks', detections_topic='/detections',
-                       clock: SequenceClock = None) -> Recording:
+def read_recording_bag(
+    path, tracks_topic='/tracks', detections_topic='/detections', clock: SequenceClock = None
+) -> Recording:
     """Tracks, detections and the heatmap grid bounds from a recorder bag (topics missing -> None).
 
     Args:
@@ -81,13 +82,17 @@ def read_recording_bag(path, tracks_topic='/tracks', detections_topic='/detectio
                         col.append(v)
         has_tracks, has_dets = tracks_topic in topics, detections_topic in topics
     if not (has_tracks or has_dets):
-        raise ValueError(f'{path}: neither {tracks_topic} nor {detections_topic} was recorded '
-                         f'(topics: {sorted(topics)})')
+        raise ValueError(
+            f'{path}: neither {tracks_topic} nor {detections_topic} was recorded (topics: {sorted(topics)})'
+        )
     return Recording(
-        BevPoints(tracks[0], np.column_stack([tracks[2], tracks[3]]) if tracks[0] else np.zeros((0, 2)),
-                  ids=tracks[1]) if has_tracks else None,
+        BevPoints(tracks[0], np.column_stack([tracks[2], tracks[3]]) if tracks[0] else np.zeros((0, 2)), ids=tracks[1])
+        if has_tracks
+        else None,
         BevPoints(dets[0], np.reshape(dets[1], (-1, 2)), scores=dets[2]) if has_dets else None,
-        sorted(track_frames) if has_tracks else None, area)
+        sorted(track_frames) if has_tracks else None,
+        area,
+    )
 
 
 def read_recording(path, **kwargs) -> Recording:
@@ -124,8 +129,12 @@ def ground_truth_from_bag(path, clock: SequenceClock = None) -> BevPoints:
 
 
 def _select(points: BevPoints, keep: np.ndarray) -> BevPoints:
-    return BevPoints(points.frames[keep], points.xy[keep], ids=None if points.ids is None else points.ids[keep],
-                     scores=points.scores[keep])
+    return BevPoints(
+        points.frames[keep],
+        points.xy[keep],
+        ids=None if points.ids is None else points.ids[keep],
+        scores=points.scores[keep],
+    )
 
 
 def _inside(points: BevPoints, area) -> BevPoints:
@@ -138,8 +147,9 @@ def _in_frames(points: BevPoints, frames) -> BevPoints:
     return None if points is None else _select(points, (points.frames >= frames[0]) & (points.frames <= frames[1]))
 
 
-def score_recording(recording: Recording, gt: BevPoints, area=None, frames=None, threshold: float = 0.5,
-                    gate: float = 1.0) -> RecordingScores:
+def score_recording(
+    recording: Recording, gt: BevPoints, area=None, frames=None, threshold: float = 0.5, gate: float = 1.0
+) -> RecordingScores:
     """Detection metrics (of the detections when recorded, else of the tracks) and tracking metrics.
 
     Args:
@@ -153,8 +163,12 @@ def score_recording(recording: Recording, gt: BevPoints, area=None, frames=None,
         gt = _inside(gt, area)
     if frames is not None:
         gt = _in_frames(gt, frames)
-        recording = Recording(_in_frames(recording.tracks, frames), _in_frames(recording.detections, frames),
-                              recording.track_frames, recording.area)
+        recording = Recording(
+            _in_frames(recording.tracks, frames),
+            _in_frames(recording.detections, frames),
+            recording.track_frames,
+            recording.area,
+        )
     source = 'detections' if recording.detections is not None else 'tracks'
     det = detection_metrics(gt, recording.detections if source == 'detections' else recording.tracks, threshold)
     trk = tracking_metrics(gt, recording.tracks, gate) if recording.tracks is not None else None

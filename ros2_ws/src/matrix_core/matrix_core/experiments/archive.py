@@ -8,8 +8,14 @@ import shutil
 from pathlib import Path
 
 # Relative glob patterns of the files kept (everything else of a run is large or reproducible).
-KEPT = ('run.json', 'steps/**/*.done.json', 'steps/**/*.error.txt', 'eval/*/metrics.json', 'eval/*/trajectories.png',
-        'tables/*/metrics.json')
+KEPT = (
+    'run.json',
+    'steps/**/*.done.json',
+    'steps/**/*.error.txt',
+    'eval/*/metrics.json',
+    'eval/*/trajectories.png',
+    'tables/*/metrics.json',
+)
 
 
 def archive_run(run_dir, dest) -> Path:

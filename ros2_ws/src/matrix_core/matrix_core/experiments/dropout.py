@@ -8,7 +8,7 @@ import numpy as np
 @dataclass(frozen=True)
 class ViewSubset:
     rate: float
-    seed: int          # -1 when the rate drops nothing (one subset only)
+    seed: int  # -1 when the rate drops nothing (one subset only)
     kept: tuple
     dropped: tuple
 
@@ -32,6 +32,12 @@ def dropout_subsets(views, rate: float, seeds) -> list:
     for seed in seeds:
         rng = np.random.default_rng([int(seed), int(round(rate * 1000))])
         drop = set(rng.choice(len(views), size=n, replace=False).tolist())
-        out.append(ViewSubset(rate, int(seed), tuple(v for i, v in enumerate(views) if i not in drop),
-                              tuple(v for i, v in enumerate(views) if i in drop)))
+        out.append(
+            ViewSubset(
+                rate,
+                int(seed),
+                tuple(v for i, v in enumerate(views) if i not in drop),
+                tuple(v for i, v in enumerate(views) if i in drop),
+            )
+        )
     return out

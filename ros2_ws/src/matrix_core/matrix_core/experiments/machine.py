@@ -18,10 +18,15 @@ def cpu_model() -> str:
 def git_commit(repo: Path) -> str:
     """``<hash>`` plus ``+local changes`` when the working tree differs from it (read-only git calls)."""
     try:
-        head = subprocess.run(['git', '-C', str(repo), 'rev-parse', '--short=12', 'HEAD'], capture_output=True,
-                              text=True, check=True).stdout.strip()
-        dirty = subprocess.run(['git', '-C', str(repo), 'status', '--porcelain', '--untracked-files=no'],
-                               capture_output=True, text=True, check=True).stdout.strip()
+        head = subprocess.run(
+            ['git', '-C', str(repo), 'rev-parse', '--short=12', 'HEAD'], capture_output=True, text=True, check=True
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ['git', '-C', str(repo), 'status', '--porcelain', '--untracked-files=no'],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
         return head + (' + local changes' if dirty else '')
     except (OSError, subprocess.CalledProcessError):
         return 'unknown'
@@ -33,10 +38,15 @@ def code_commit(repo: Path = None) -> dict:
     which steps predate the code, or ran with local changes to the code they depend on."""
     repo = Path(repo) if repo else Path(__file__).resolve().parents[5]
     try:
-        head = subprocess.run(['git', '-C', str(repo), 'rev-parse', 'HEAD'], capture_output=True, text=True,
-                              check=True).stdout.strip()
-        status = subprocess.run(['git', '-C', str(repo), 'status', '--porcelain', '--untracked-files=no'],
-                                capture_output=True, text=True, check=True).stdout.splitlines()
+        head = subprocess.run(
+            ['git', '-C', str(repo), 'rev-parse', 'HEAD'], capture_output=True, text=True, check=True
+        ).stdout.strip()
+        status = subprocess.run(
+            ['git', '-C', str(repo), 'status', '--porcelain', '--untracked-files=no'],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.splitlines()
         paths = [line[3:].split(' -> ')[-1] for line in status if line.strip()]
         return {'commit': head, 'dirty': bool(paths), 'dirty_paths': paths[:200]}
     except (OSError, subprocess.CalledProcessError):
@@ -48,5 +58,12 @@ def machine_info(threads: int, repo: Path) -> dict:
 
     import torch
 
-    return {'cpu': cpu_model(), 'cpu_count': os.cpu_count(), 'threads': threads, 'torch': torch.__version__,
-            'python': platform.python_version(), 'platform': platform.platform(), 'git_commit': git_commit(repo)}
+    return {
+        'cpu': cpu_model(),
+        'cpu_count': os.cpu_count(),
+        'threads': threads,
+        'torch': torch.__version__,
+        'python': platform.python_version(),
+        'platform': platform.platform(),
+        'git_commit': git_commit(repo),
+    }

@@ -29,7 +29,7 @@ class Figure:
 def _f(text: str) -> Figure:
     """'~89' -> Figure(89, '~'); '>80' -> Figure(80, '>'); '5.72' -> Figure(5.72)."""
     mark = text[0] if text[0] in '~>' else ''
-    number = text[len(mark):]
+    number = text[len(mark) :]
     return Figure(float(number), mark, len(number.split('.')[1]) if '.' in number else 0)
 
 
@@ -53,31 +53,35 @@ STATIONARY = {
 STATIONARY = {method: dict(zip(STATIONARY_DATASETS, rows)) for method, rows in STATIONARY.items()}
 
 # Moving drones, per variant: method -> metric -> Figure (metric names as in records.METRICS).
-SIMPLE = {'EarlyBird': {'MODA': _f('94'), 'recall': _f('95.9')},
-          'TrackTacular': {'MOTA': _f('92.7'), 'IDF1': _f('79.64')}}
+SIMPLE = {
+    'EarlyBird': {'MODA': _f('94'), 'recall': _f('95.9')},
+    'TrackTacular': {'MOTA': _f('92.7'), 'IDF1': _f('79.64')},
+}
 SIMPLE_PROPOSED_NOTE = 'the proposed method: "marginally lower" (no figure)'
-COMPLEX = {'TrackTacular': {'MODA': _f('5.72'), 'MOTA': _f('31.44'), 'MT': _f('0')},
-           'proposed': {'MODA': _f('~89'), 'MOTA': _f('~88.5'), 'precision': _f('~97'), 'recall': _f('~86'),
-                        'MT': _f('~80')}}
+COMPLEX = {
+    'TrackTacular': {'MODA': _f('5.72'), 'MOTA': _f('31.44'), 'MT': _f('0')},
+    'proposed': {'MODA': _f('~89'), 'MOTA': _f('~88.5'), 'precision': _f('~97'), 'recall': _f('~86'), 'MT': _f('~80')},
+}
 VARIANTS = {'simple': SIMPLE, 'complex': COMPLEX}
 
 # Transfer to the modified variant trained on TRANSFER_SHARE of its data: from scratch vs pretrained on complex.
 TRANSFER_SHARE = 0.5
-TRANSFER = {'scratch': {'MODA': _f('~54'), 'MODP': _f('>80')},
-            'pretrained': {'MODA': _f('~69'), 'MODP': _f('>80')}}
+TRANSFER = {'scratch': {'MODA': _f('~54'), 'MODP': _f('>80')}, 'pretrained': {'MODA': _f('~69'), 'MODP': _f('>80')}}
 TRANSFER_NOTE = 'MOTA and MOTP "relatively similar" for both'
 
 # Camera dropout: (variant, metric) -> {drop rate: Figure}.
-DROPOUT = {('simple', 'MODA'): {0.25: _f('>80'), 0.75: _f('~45')},
-           ('complex', 'MODA'): {0.25: _f('>80'), 0.75: _f('~36')},
-           ('complex', 'MOTA'): {0.25: _f('>80'), 0.75: _f('~40')},
-           ('simple', 'MOTA'): {0.75: _f('~60')}}
+DROPOUT = {
+    ('simple', 'MODA'): {0.25: _f('>80'), 0.75: _f('~45')},
+    ('complex', 'MODA'): {0.25: _f('>80'), 0.75: _f('~36')},
+    ('complex', 'MOTA'): {0.25: _f('>80'), 0.75: _f('~40')},
+    ('simple', 'MOTA'): {0.75: _f('~60')},
+}
 DROPOUT_MOTA_NOTE = 'complex MOTA > 80 up to 0.25'
 DROPOUT_MODP_NOTE = 'MODP "relatively stable"'
-DROPOUT_MOTP_RANGE = (75.0, 85.0)          # MOTP within 75-85 for all rates (both variants)
+DROPOUT_MOTP_RANGE = (75.0, 85.0)  # MOTP within 75-85 for all rates (both variants)
 
 # Training and statistics.
 EPOCHS = 100
 RUNS = 10
-RUNS_VARY = 'the RANSAC of registration'   # mean and standard deviation over RUNS runs
+RUNS_VARY = 'the RANSAC of registration'  # mean and standard deviation over RUNS runs
 BASELINES_NOTE = 'baselines deterministic'

@@ -31,7 +31,7 @@ from matrix_core.fusion.settings import DEFAULT_CHECKPOINT
 VARIANTS = ('simple', 'complex', 'modified')
 # Simulator seeds of the training and held-out test sequences (never equal).
 SIM_SEEDS = {'simple': (101, 201), 'complex': (102, 202), 'modified': (103, 203)}
-VIEWS = ('D1', 'D2', 'D3', 'D4', 'D5', 'D6', 'D7', 'D8')   # the simulator's eight drones
+VIEWS = ('D1', 'D2', 'D3', 'D4', 'D5', 'D6', 'D7', 'D8')  # the simulator's eight drones
 # Test variants whose geometry is estimated (registration, PnP), and the steps that do it (name -> kind).
 GEOMETRY_VARIANTS = ('simple', 'complex')
 GEOMETRY_STEPS = {'pnp': 'calibrate', 'registration': 'register'}
@@ -42,6 +42,7 @@ ABLATION_SOURCES = ('registration', 'pnp', 'pnp_stale', 'ground_truth', 'frozen_
 HEADLINE_SOURCE = 'registration'
 ORACLE_SOURCE = 'ground_truth'
 MULTIVIEWX_STEP = 'tables/multiviewx_sample'
+
 
 @dataclass(frozen=True)
 class Step:
@@ -62,20 +63,44 @@ def sim_size(size: ExperimentSize) -> list:
 def data_step(variant: str, role: str, size: ExperimentSize) -> Step:
     seed = SIM_SEEDS[variant][0 if role == 'train' else 1]
     frames = size.train_frames if role == 'train' else size.test_frames
-    return Step(f'data/{variant}_{role}', 'simulate',
-                {'config': variant, 'frames': frames, 'seed': seed, 'fast': size.sim_fast, 'image_ext': '.jpg'})
+    return Step(
+        f'data/{variant}_{role}',
+        'simulate',
+        {'config': variant, 'frames': frames, 'seed': seed, 'fast': size.sim_fast, 'image_ext': '.jpg'},
+    )
 
 
-def train_step(name: str, variant: str, size: ExperimentSize, seed: int = 0, calibration: str = 'ground_truth',
-               frames: int = None, init: str = None) -> Step:
+def train_step(
+    name: str,
+    variant: str,
+    size: ExperimentSize,
+    seed: int = 0,
+    calibration: str = 'ground_truth',
+    frames: int = None,
+    init: str = None,
+) -> Step:
     data = f'data/{variant}_train'
-    bev = {'model': size.model, 'image_width': size.image_width, 'image_height': size.image_height,
-           'cell_m': size.cell_m}
-    params = {'variant': variant, 'dataset': data, 'frames': [0, (frames or size.train_frames) - 1],
-              'calibration': calibration, 'bev': bev, 'epochs': size.epochs, 'lr': size.lr,
-              'lr_schedule': size.lr_schedule, 'batch_size': size.batch_size, 'seed': seed,
-              'max_steps_per_epoch': size.max_steps_per_epoch, 'augment': size.augment,
-              'init': f'train/{init}' if init else None}
+    bev = {
+        'model': size.model,
+        'image_width': size.image_width,
+        'image_height': size.image_height,
+        'cell_m': size.cell_m,
+    }
+    params = {
+        'variant': variant,
+        'dataset': data,
+        'frames': [0, (frames or size.train_frames) - 1],
+        'calibration': calibration,
+        'bev': bev,
+        'epochs': size.epochs,
+        'lr': size.lr,
+        'lr_schedule': size.lr_schedule,
+        'batch_size': size.batch_size,
+        'seed': seed,
+        'max_steps_per_epoch': size.max_steps_per_epoch,
+        'augment': size.augment,
+        'init': f'train/{init}' if init else None,
+    }
     return Step(f'train/{name}', 'train', params, (data,) + ((f'train/{init}',) if init else ()))
 
 
@@ -91,8 +116,9 @@ def geometry_step(variant: str, kind: str, size: ExperimentSize, ransac_seed: in
     params = {'dataset': f'data/{variant}_test', 'variant': variant, 'image_size': sim_size(size)}
     source = 'pnp' if kind == 'calibrate' else 'registration'
     if kind == 'register':
-        params.update(estimator='magsac' if ransac_seed is None else 'ransac',
-                      seed=0 if ransac_seed is None else int(ransac_seed))
+        params.update(
+            estimator='magsac' if ransac_seed is None else 'ransac', seed=0 if ransac_seed is None else int(ransac_seed)
+        )
     return Step(geometry_dir(variant, source, ransac_seed), kind, params, (f'data/{variant}_test',))
 
 
@@ -101,14 +127,31 @@ def transfer_name(kind: str, share: float) -> str:
     return f'modified_{kind}_p{100 * share:g}'
 
 
-def eval_step(model: str, variant: str, calibration: str = 'ground_truth', subset=None, plot: bool = False,
-              ransac_seed: int = None) -> Step:
+def eval_step(
+    model: str,
+    variant: str,
+    calibration: str = 'ground_truth',
+    subset=None,
+    plot: bool = False,
+    ransac_seed: int = None,
+) -> Step:
     data = f'data/{variant}_test'
     name = f'eval/{model}__{variant}__{calibration}'
     needs = [data, f'train/{model}']
-    params = {'model': model, 'test': variant, 'dataset': data, 'checkpoint': f'train/{model}/last.pt',
-              'calibration': calibration, 'calibration_dir': None, 'ransac_seed': ransac_seed, 'views': None,
-              'dropped': [], 'drop_rate': 0.0, 'drop_seed': -1, 'plot': plot}
+    params = {
+        'model': model,
+        'test': variant,
+        'dataset': data,
+        'checkpoint': f'train/{model}/last.pt',
+        'calibration': calibration,
+        'calibration_dir': None,
+        'ransac_seed': ransac_seed,
+        'views': None,
+        'dropped': [],
+        'drop_rate': 0.0,
+        'drop_seed': -1,
+        'plot': plot,
+    }
     if ransac_seed is not None and calibration != 'registration':
         raise ValueError('a RANSAC seed only applies to the registration source')
     if calibration in SOURCE_DIRS:
@@ -118,8 +161,9 @@ def eval_step(model: str, variant: str, calibration: str = 'ground_truth', subse
         name += f'__ransac_s{ransac_seed}'
     if subset is not None and subset.dropped:
         name += f'__drop{subset.rate:g}_s{subset.seed}'
-        params.update(views=list(subset.kept), dropped=list(subset.dropped), drop_rate=subset.rate,
-                      drop_seed=subset.seed)
+        params.update(
+            views=list(subset.kept), dropped=list(subset.dropped), drop_rate=subset.rate, drop_seed=subset.seed
+        )
     return Step(name, 'evaluate', params, tuple(needs))
 
 
@@ -141,25 +185,34 @@ def build_plan(size: ExperimentSize) -> list:
     for share in sorted(size.transfer_shares):
         frames = size.frames_of_share(share)
         steps.append(train_step(transfer_name('scratch', share), 'modified', size, seed=first, frames=frames))
-        steps.append(train_step(transfer_name('transfer', share), 'modified', size, seed=first, frames=frames,
-                                init=main))
+        steps.append(
+            train_step(transfer_name('transfer', share), 'modified', size, seed=first, frames=frames, init=main)
+        )
     # 1: every geometry source on both variants, the static-trained models with their frozen calibration.
     for variant, model in (('simple', 'simple_s0'), ('complex', main)):
-        steps += [eval_step(model, variant, source, plot=source in (HEADLINE_SOURCE, ORACLE_SOURCE))
-                  for source in ABLATION_SOURCES]
+        steps += [
+            eval_step(model, variant, source, plot=source in (HEADLINE_SOURCE, ORACLE_SOURCE))
+            for source in ABLATION_SOURCES
+        ]
         steps.append(eval_step(f'{variant}_static', variant, 'frozen_first'))
     # 4: RANSAC seeds of the registration with the main model; training seeds with the live geometry.
     steps += [eval_step(main, 'complex', 'registration', ransac_seed=k) for k in size.ransac_seeds]
     steps += [eval_step(f'complex_s{s}', 'complex', HEADLINE_SOURCE) for s in size.seeds]
     # 2: transfer sweep.
-    steps += [eval_step(transfer_name(kind, share), 'modified') for share in sorted(size.transfer_shares)
-              for kind in ('scratch', 'transfer')]
+    steps += [
+        eval_step(transfer_name(kind, share), 'modified')
+        for share in sorted(size.transfer_shares)
+        for kind in ('scratch', 'transfer')
+    ]
     steps.append(eval_step(main, 'modified'))
     # 3: dropout (rate 0 is the plain oracle evaluation above).
     for model, variant in (('simple_s0', 'simple'), (main, 'complex')):
         for rate in size.dropout_rates:
-            steps += [eval_step(model, variant, subset=s) for s in dropout_subsets(VIEWS, rate, size.dropout_seeds)
-                      if s.dropped]
+            steps += [
+                eval_step(model, variant, subset=s)
+                for s in dropout_subsets(VIEWS, rate, size.dropout_seeds)
+                if s.dropped
+            ]
     unique = {}
     for s in steps:
         unique.setdefault(s.name, s)

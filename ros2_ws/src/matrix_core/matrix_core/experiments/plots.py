@@ -28,13 +28,26 @@ def bar_chart(path, metrics: list, series: dict, title: str, paper: dict = None)
     for i, (label, vals, is_paper) in enumerate(all_series):
         vals = np.array([np.nan if v is None else v for v in vals], float)
         pos = x - 0.4 + width * (i + 0.5)
-        bars = ax.bar(pos, np.nan_to_num(vals), width, label=label, hatch='//' if is_paper else None,
-                      alpha=0.55 if is_paper else 0.9, edgecolor='black', linewidth=0.5)
+        bars = ax.bar(
+            pos,
+            np.nan_to_num(vals),
+            width,
+            label=label,
+            hatch='//' if is_paper else None,
+            alpha=0.55 if is_paper else 0.9,
+            edgecolor='black',
+            linewidth=0.5,
+        )
         for b, v in zip(bars, vals):
             if is_paper and math.isnan(v):
-                continue            # the paper gives no number for this metric
-            ax.annotate('n/a' if math.isnan(v) else f'{v:.1f}', (b.get_x() + b.get_width() / 2, max(v, 0) if
-                        not math.isnan(v) else 0), ha='center', va='bottom', fontsize=7)
+                continue  # the paper gives no number for this metric
+            ax.annotate(
+                'n/a' if math.isnan(v) else f'{v:.1f}',
+                (b.get_x() + b.get_width() / 2, max(v, 0) if not math.isnan(v) else 0),
+                ha='center',
+                va='bottom',
+                fontsize=7,
+            )
     ax.axhline(0, color='black', linewidth=0.8)
     ax.set_xticks(x, metrics)
     ax.set_ylabel('%')
@@ -46,13 +59,23 @@ def bar_chart(path, metrics: list, series: dict, title: str, paper: dict = None)
 
 def _paper_marker(ax, x: float, figure, color, label: str = None) -> None:
     """A paper figure as a star (approximate '~' or exact) or a triangle pointing up (a '>' bound)."""
-    ax.plot([x], [figure.value], marker='^' if figure.mark == '>' else '*', markersize=11, linestyle='none',
-            color=color, markeredgecolor='black', alpha=0.75, label=label)
+    ax.plot(
+        [x],
+        [figure.value],
+        marker='^' if figure.mark == '>' else '*',
+        markersize=11,
+        linestyle='none',
+        color=color,
+        markeredgecolor='black',
+        alpha=0.75,
+        label=label,
+    )
     ax.annotate(str(figure), (x, figure.value), textcoords='offset points', xytext=(6, 2), fontsize=7)
 
 
-def dropout_curves(path, curves: dict, metrics=('MODA', 'MODP', 'MOTA', 'MOTP'), paper_points: dict = None,
-                   bands: dict = None) -> Path:
+def dropout_curves(
+    path, curves: dict, metrics=('MODA', 'MODP', 'MOTA', 'MOTP'), paper_points: dict = None, bands: dict = None
+) -> Path:
     """One panel per metric: value vs drop rate with +-1 std bars. ``curves``: label -> {rate: {metric:
     (mean, std)}}; ``paper_points``: (label, metric) -> {rate: paper.Figure}, drawn as markers in the
     colour of that label's curve; ``bands``: metric -> (low, high), a range the paper states (shaded)."""
@@ -69,8 +92,7 @@ def dropout_curves(path, curves: dict, metrics=('MODA', 'MODP', 'MOTA', 'MOTP'),
         for (label, m), points in (paper_points or {}).items():
             if m == metric:
                 for i, (rate, figure) in enumerate(sorted(points.items())):
-                    _paper_marker(ax, rate, figure, colors.get(label, 'black'),
-                                  f'paper, {label}' if i == 0 else None)
+                    _paper_marker(ax, rate, figure, colors.get(label, 'black'), f'paper, {label}' if i == 0 else None)
         if metric in (bands or {}):
             low, high = bands[metric]
             ax.axhspan(low, high, color='grey', alpha=0.15, label=f'paper: {low:g}-{high:g}')
@@ -91,7 +113,7 @@ def share_curves(path, curves: dict, paper_points: dict = None, metric: str = 'M
     colors = {}
     for label, by_share in curves.items():
         shares = sorted(by_share)
-        line, = ax.plot([100 * x for x in shares], [by_share[x] for x in shares], marker='o', label=label)
+        (line,) = ax.plot([100 * x for x in shares], [by_share[x] for x in shares], marker='o', label=label)
         colors[label] = line.get_color()
     for label, points in (paper_points or {}).items():
         for i, (share, figure) in enumerate(sorted(points.items())):

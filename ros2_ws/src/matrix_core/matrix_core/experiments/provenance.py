@@ -14,11 +14,25 @@ CORE = 'ros2_ws/src/matrix_core/matrix_core/'
 # not code they run (git pathspecs; a new default checkpoint reruns the live-graph step through its cache key).
 BEV_CODE = (CORE + 'bev', f':(exclude){CORE}bev/checkpoints', f':(exclude){CORE}bev/configs')
 # Step kind -> code it depends on (git pathspecs relative to the repository root).
-CODE_PATHS = {'simulate': (CORE + 'sim',), 'calibrate': (CORE + 'calib',), 'register': (CORE + 'register',),
-              'train': BEV_CODE, 'evaluate': BEV_CODE, 'readers': (CORE + 'datasets',),
-              'live_graph': (CORE + 'calib', CORE + 'register', CORE + 'bev', CORE + 'fusion', CORE + 'tracking',
-                             *(f'ros2_ws/src/{pkg}' for pkg in ('matrix_calib', 'matrix_register', 'matrix_bev_tracker',
-                                                                 'matrix_ros', 'matrix_bringup')))}
+CODE_PATHS = {
+    'simulate': (CORE + 'sim',),
+    'calibrate': (CORE + 'calib',),
+    'register': (CORE + 'register',),
+    'train': BEV_CODE,
+    'evaluate': BEV_CODE,
+    'readers': (CORE + 'datasets',),
+    'live_graph': (
+        CORE + 'calib',
+        CORE + 'register',
+        CORE + 'bev',
+        CORE + 'fusion',
+        CORE + 'tracking',
+        *(
+            f'ros2_ws/src/{pkg}'
+            for pkg in ('matrix_calib', 'matrix_register', 'matrix_bev_tracker', 'matrix_ros', 'matrix_bringup')
+        ),
+    ),
+}
 
 
 def _git(repo: Path, *args) -> subprocess.CompletedProcess:
@@ -69,8 +83,9 @@ def stale_steps(repo, done: dict) -> dict:
         ancestor = is_ancestor(repo, last, commit)
         where = ', '.join(p.replace(CORE, '') for p in paths if not p.startswith(':('))
         if ancestor is None:
-            out[name] = (f'made at {commit[:12]}, not in this repository\'s history ({where} last changed at '
-                         f'{last[:12]})')
+            out[name] = (
+                f'made at {commit[:12]}, not in this repository\'s history ({where} last changed at {last[:12]})'
+            )
         elif not ancestor:
             out[name] = f'made at {commit[:12]}; {where} changed since (last at {last[:12]})'
         elif record.get('dirty') and _touches(record.get('dirty_paths'), paths):

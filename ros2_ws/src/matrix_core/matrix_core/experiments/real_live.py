@@ -38,7 +38,9 @@ def _run(cmd: list, out: Path, log_name: str, env: dict) -> None:
         rc = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, env=env).returncode
     if rc != 0:
         tail = (out / log_name).read_text()[-800:]
-        raise RuntimeError(f'{" ".join(str(c) for c in cmd[:4])} ... exited with {rc}; end of {out / log_name}:\n{tail}')
+        raise RuntimeError(
+            f'{" ".join(str(c) for c in cmd[:4])} ... exited with {rc}; end of {out / log_name}:\n{tail}'
+        )
 
 
 def run_live_real(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
@@ -61,15 +63,53 @@ def run_live_real(p: dict, out: Path, run_dir: Path, progress: bool, log) -> Non
     bag = out / 'bag'
     _run(cli + ['bag', str(root), '--out', str(bag)], out, 'bag.log', env)
     try:
-        _run([sys.executable, '-m', 'matrix_bringup.run_graph', '--bag', str(bag), '--dataset', str(root),
-              '--drones_per_process', '4', '--record', str(out / 'recording'), '--checkpoint', str(checkpoint),
-              '--log_dir', str(out / 'logs')], out, 'run_graph.log', env)
-        _run(cli + ['evaluate-recording', str(out / 'recording'), '--ground-truth', str(bag), '--dataset', str(root),
-                    '--json', str(out / 'live_metrics.json')], out, 'evaluate.log', env)
+        _run(
+            [
+                sys.executable,
+                '-m',
+                'matrix_bringup.run_graph',
+                '--bag',
+                str(bag),
+                '--dataset',
+                str(root),
+                '--drones_per_process',
+                '4',
+                '--record',
+                str(out / 'recording'),
+                '--checkpoint',
+                str(checkpoint),
+                '--log_dir',
+                str(out / 'logs'),
+            ],
+            out,
+            'run_graph.log',
+            env,
+        )
+        _run(
+            cli
+            + [
+                'evaluate-recording',
+                str(out / 'recording'),
+                '--ground-truth',
+                str(bag),
+                '--dataset',
+                str(root),
+                '--json',
+                str(out / 'live_metrics.json'),
+            ],
+            out,
+            'evaluate.log',
+            env,
+        )
     finally:
-        shutil.rmtree(bag, ignore_errors=True)   # raw 1080p images of the sample (about 250 MB), made again on demand
+        shutil.rmtree(bag, ignore_errors=True)  # raw 1080p images of the sample (about 250 MB), made again on demand
     live = json.loads((out / 'live_metrics.json').read_text())
-    record = {**p, 'path': str(root), 'detection': live['detection'], 'tracking': live['tracking'],
-              'image_plane_all': live.get('image_plane', {}).get('per_drone', {}).get('all'),
-              'frames_without_tracks': live.get('frames_without_tracks')}
+    record = {
+        **p,
+        'path': str(root),
+        'detection': live['detection'],
+        'tracking': live['tracking'],
+        'image_plane_all': live.get('image_plane', {}).get('per_drone', {}).get('all'),
+        'frames_without_tracks': live.get('frames_without_tracks'),
+    }
     (out / 'metrics.json').write_text(json.dumps(record, indent=2))

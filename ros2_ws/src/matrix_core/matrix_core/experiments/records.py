@@ -35,8 +35,10 @@ def load_table(run_dir, name: str):
 def load_done(run_dir) -> dict:
     """Every ``steps/<name>.done.json`` of a run: step name -> record (kind, params, wall_s, commit)."""
     steps = Path(run_dir) / 'steps'
-    return {str(p.relative_to(steps))[:-len('.done.json')]: json.loads(p.read_text())
-            for p in sorted(steps.glob('**/*.done.json'))}
+    return {
+        str(p.relative_to(steps))[: -len('.done.json')]: json.loads(p.read_text())
+        for p in sorted(steps.glob('**/*.done.json'))
+    }
 
 
 def load_run(run_dir) -> dict:

@@ -43,8 +43,11 @@ def record_path(run_dir: Path, name: str, what: str) -> Path:
 
 def _prepare(step, run_dir: Path) -> bool:
     """True when the step's folder already holds its finished result; else leave it ready to run."""
-    out, started, done = run_dir / step.name, record_path(run_dir, step.name, 'started.json'), \
-        record_path(run_dir, step.name, 'done.json')
+    out, started, done = (
+        run_dir / step.name,
+        record_path(run_dir, step.name, 'started.json'),
+        record_path(run_dir, step.name, 'done.json'),
+    )
     previous = _read_json(started)
     if previous == step.params and done.is_file():
         return True
@@ -73,9 +76,19 @@ def run_step(step, run_dir: Path, progress: bool, log) -> dict:
         log(f'{step.name}: FAILED: {type(exc).__name__}: {exc} (traceback in {error})')
         return {'state': FAILED, 'reason': f'{type(exc).__name__}: {exc}'.splitlines()[0][:300]}
     wall = time.perf_counter() - start
-    record_path(run_dir, step.name, 'done.json').write_text(json.dumps(
-        {'name': step.name, 'kind': step.kind, 'params': step.params, 'wall_s': wall, **code_commit(),
-         'finished_utc': time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime())}, indent=2))
+    record_path(run_dir, step.name, 'done.json').write_text(
+        json.dumps(
+            {
+                'name': step.name,
+                'kind': step.kind,
+                'params': step.params,
+                'wall_s': wall,
+                **code_commit(),
+                'finished_utc': time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime()),
+            },
+            indent=2,
+        )
+    )
     return {'state': DONE, 'wall_s': wall}
 
 
@@ -131,8 +144,9 @@ def _run_parallel(plan: list, run_dir: Path, threads: int, jobs: int, bar, state
                 step_done()
 
 
-def run_plan(plan: list, size, run_dir, threads: int = 1, progress: bool = True, log=print, repo=None,
-             jobs: int = 1) -> dict:
+def run_plan(
+    plan: list, size, run_dir, threads: int = 1, progress: bool = True, log=print, repo=None, jobs: int = 1
+) -> dict:
     """Run every step of ``plan`` (in order; ``jobs`` at once) under ``run_dir``; returns and writes ``run.json``."""
     from tqdm import tqdm
 
@@ -141,18 +155,25 @@ def run_plan(plan: list, size, run_dir, threads: int = 1, progress: bool = True,
     torch.set_num_threads(threads)
     started = time.time()
     states = {}
-    summary = {'size': {**dataclasses.asdict(size), 'transfer_fraction': size.transfer_fraction,
-                        'transfer_frames': size.transfer_frames},
-               'machine': {**machine_info(threads, Path(repo or Path.cwd())), 'jobs': jobs},
-               'started_utc': time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime(started)),
-               'wall_s': 0.0, 'steps': states}
+    summary = {
+        'size': {
+            **dataclasses.asdict(size),
+            'transfer_fraction': size.transfer_fraction,
+            'transfer_frames': size.transfer_frames,
+        },
+        'machine': {**machine_info(threads, Path(repo or Path.cwd())), 'jobs': jobs},
+        'started_utc': time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime(started)),
+        'wall_s': 0.0,
+        'steps': states,
+    }
 
     def step_done() -> None:  # after every step: a run killed midway still says how far it got
         _write_run(run_dir, summary, started)
 
     if jobs > 1:
-        with tqdm(total=len(plan), desc=f'experiments ({size.name}, {jobs} jobs)', unit='step',
-                  disable=not progress) as bar:
+        with tqdm(
+            total=len(plan), desc=f'experiments ({size.name}, {jobs} jobs)', unit='step', disable=not progress
+        ) as bar:
             _run_parallel(plan, run_dir, threads, jobs, bar, states, step_done)
         summary['steps'] = {s.name: states[s.name] for s in plan}
     else:
@@ -162,8 +183,10 @@ def run_plan(plan: list, size, run_dir, threads: int = 1, progress: bool = True,
             bar.set_postfix_str(step.name)
             blocked = _blocked(step, states, planned)
             if blocked:
-                states[step.name] = {'state': SKIPPED, 'reason': f'needs {blocked[0]}, which was '
-                                     f'{"not run" if blocked[1] == "wait" else blocked[1]}'}
+                states[step.name] = {
+                    'state': SKIPPED,
+                    'reason': f'needs {blocked[0]}, which was {"not run" if blocked[1] == "wait" else blocked[1]}',
+                }
             else:
                 states[step.name] = {'kind': step.kind, **run_step(step, run_dir, progress, log)}
             step_done()
@@ -179,8 +202,18 @@ def _write_run(run_dir: Path, summary: dict, started: float) -> None:
     tmp.replace(run_dir / RUN_FILE)
 
 
-def run_experiments(size, out_dir, report, images=None, threads: int = 1, progress: bool = True, log=print,
-                    repo=None, jobs: int = None, metrics_dir=None) -> tuple:
+def run_experiments(
+    size,
+    out_dir,
+    report,
+    images=None,
+    threads: int = 1,
+    progress: bool = True,
+    log=print,
+    repo=None,
+    jobs: int = None,
+    metrics_dir=None,
+) -> tuple:
     """The whole thing: plan of ``size`` run in ``out_dir/<size.name>`` (``jobs`` steps at once, default the
     size's), its small files archived to ``metrics_dir`` (default ``<report folder>/results/<size>``),
     then the report from that archive. Returns (run summary, report path)."""

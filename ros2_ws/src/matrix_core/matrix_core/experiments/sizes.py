@@ -57,8 +57,9 @@ class ExperimentSize:
         if self.train_frames < 2 or self.test_frames < 2:
             raise ValueError('train_frames and test_frames must be >= 2')
         if not all(0 < f <= 1 for f in self.transfer_shares) or self.transfer_fraction not in self.transfer_shares:
-            raise ValueError(f'transfer_shares must be in (0, 1] and hold {self.transfer_fraction}, '
-                             f'got {self.transfer_shares}')
+            raise ValueError(
+                f'transfer_shares must be in (0, 1] and hold {self.transfer_fraction}, got {self.transfer_shares}'
+            )
         if len(self.seeds) < 1 or not self.dropout_rates or not self.ransac_seeds or self.jobs < 1:
             raise ValueError('need at least one training seed, RANSAC seed, dropout rate and job')
 
@@ -75,10 +76,21 @@ class ExperimentSize:
 
 
 QUICK = ExperimentSize(
-    name='quick', smoke_test=True, train_frames=40, test_frames=12, image_width=160, image_height=96,
-    cell_m=0.5, model='bev_tiny', epochs=5, lr=3e-3, transfer_shares=(0.25, 0.5), ransac_seeds=(0, 1),
-    expected_minutes=10,   # 64 steps: 9.7 min wall (4 min CPU) on the 2-core machine under load, 2026-12-02
-    notes='tiny sequences, 160x96 input, 0.5 m cells, 5 epochs: a smoke test of the whole pipeline')
+    name='quick',
+    smoke_test=True,
+    train_frames=40,
+    test_frames=12,
+    image_width=160,
+    image_height=96,
+    cell_m=0.5,
+    model='bev_tiny',
+    epochs=5,
+    lr=3e-3,
+    transfer_shares=(0.25, 0.5),
+    ransac_seeds=(0, 1),
+    expected_minutes=10,  # 64 steps: 9.7 min wall (4 min CPU) on the 2-core machine under load, 2026-12-02
+    notes='tiny sequences, 160x96 input, 0.5 m cells, 5 epochs: a smoke test of the whole pipeline',
+)
 
 # The recipe of the former checkpoints/complex.pt (bev/configs/complex.yaml: 500 frames, 480x272 input,
 # 17 epochs, batch 2, cosine lr) for each of the 7 trainings: about 70 min per model on one thread of the
@@ -86,20 +98,43 @@ QUICK = ExperimentSize(
 # 2-core AVX2 EPYC (measured 2026-12-01). The plan now trains about 2.8 more (simple_static and the transfer
 # sweep), with two at once: roughly the same 18 h wall.
 FULL = ExperimentSize(
-    name='full', smoke_test=False, train_frames=500, test_frames=100, image_width=480, image_height=272,
-    cell_m=0.25, model='bev_small', epochs=17, lr=2e-3, batch_size=2, seeds=(0, 1, 2),
-    dropout_seeds=(0, 1, 2, 3, 4), jobs=2, expected_minutes=18 * 60,
-    notes='the recipe of the shipped complex model (500 frames, 480x272 input, 0.25 m cells, 17 epochs)')
+    name='full',
+    smoke_test=False,
+    train_frames=500,
+    test_frames=100,
+    image_width=480,
+    image_height=272,
+    cell_m=0.25,
+    model='bev_small',
+    epochs=17,
+    lr=2e-3,
+    batch_size=2,
+    seeds=(0, 1, 2),
+    dropout_seeds=(0, 1, 2, 3, 4),
+    jobs=2,
+    expected_minutes=18 * 60,
+    notes='the recipe of the shipped complex model (500 frames, 480x272 input, 0.25 m cells, 17 epochs)',
+)
 
 # A medium run (about 35 min on one thread) between the two: still far too small for the paper's numbers.
-MEDIUM = replace(QUICK, name='medium', smoke_test=False, train_frames=240, test_frames=40, image_width=192,
-                 image_height=112, epochs=15, lr=2e-3, transfer_shares=(0.05, 0.1, 0.25, 0.5),
-                 ransac_seeds=(0, 1, 2), expected_minutes=35,
-                 notes='short sequences, 192x112 input, 0.5 m cells, 15 epochs: more than a smoke test, far '
-                       'from the paper',
-                 warning='REDUCED-SIZE RUN: short simulated sequences, low resolution and short CPU training. The '
-                         'numbers show the direction and rough size of the effects at best; single-sequence, '
-                         'few-seed results move by several points between runs.')
+MEDIUM = replace(
+    QUICK,
+    name='medium',
+    smoke_test=False,
+    train_frames=240,
+    test_frames=40,
+    image_width=192,
+    image_height=112,
+    epochs=15,
+    lr=2e-3,
+    transfer_shares=(0.05, 0.1, 0.25, 0.5),
+    ransac_seeds=(0, 1, 2),
+    expected_minutes=35,
+    notes='short sequences, 192x112 input, 0.5 m cells, 15 epochs: more than a smoke test, far from the paper',
+    warning='REDUCED-SIZE RUN: short simulated sequences, low resolution and short CPU training. The '
+    'numbers show the direction and rough size of the effects at best; single-sequence, '
+    'few-seed results move by several points between runs.',
+)
 
 # The default detector's recipe (bev/configs/detector.yaml: bev_small, 320x176 input, 0.25 m cells, batch 1,
 # lr 2e-3 cosine, augmentation; 600 frames x 8 epochs in about 40 min per training on one thread of this
@@ -109,13 +144,27 @@ MEDIUM = replace(QUICK, name='medium', smoke_test=False, train_frames=240, test_
 # and about 60 evaluations. Measured end to end on an idle machine (stop 31, commit d4e417f): 109.5 min wall,
 # 218.5 min summed over the 89 steps (complex trainings about 28 min each, simple 15, evaluations 2-8 s).
 STANDARD = ExperimentSize(
-    name='standard', smoke_test=False, train_frames=300, test_frames=60, image_width=320, image_height=176,
-    cell_m=0.25, model='bev_small', epochs=10, lr=2e-3, batch_size=1, augment=True, seeds=(0, 1, 2),
-    dropout_seeds=(0, 1, 2), jobs=2, expected_minutes=110,
+    name='standard',
+    smoke_test=False,
+    train_frames=300,
+    test_frames=60,
+    image_width=320,
+    image_height=176,
+    cell_m=0.25,
+    model='bev_small',
+    epochs=10,
+    lr=2e-3,
+    batch_size=1,
+    augment=True,
+    seeds=(0, 1, 2),
+    dropout_seeds=(0, 1, 2),
+    jobs=2,
+    expected_minutes=110,
     notes="the default detector's recipe (320x176 input, 0.25 m cells, augmentation) on 300-frame sequences, "
-          '10 epochs, two steps at once',
+    '10 epochs, two steps at once',
     warning='STANDARD-SIZE RUN: the default detector\'s input and cell size, but 300 training frames per variant '
-            'and 10 CPU epochs (the paper trains 100 epochs on GPUs); single test sequences move MODA/MOTA by '
-            'a few points.')
+    'and 10 CPU epochs (the paper trains 100 epochs on GPUs); single test sequences move MODA/MOTA by '
+    'a few points.',
+)
 
 SIZES = {s.name: s for s in (QUICK, MEDIUM, STANDARD, FULL)}

@@ -21,8 +21,16 @@ def run_simulate(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None
     from matrix_core.sim.sequence import simulate
     from matrix_core.sim.settings import SimulateSettings
 
-    simulate(SimulateSettings(config=p['config'], frames=p['frames'], seed=p['seed'], out=str(out), fast=p['fast'],
-                              image_ext=p['image_ext']))
+    simulate(
+        SimulateSettings(
+            config=p['config'],
+            frames=p['frames'],
+            seed=p['seed'],
+            out=str(out),
+            fast=p['fast'],
+            image_ext=p['image_ext'],
+        )
+    )
 
 
 def _cli(args: list, out: Path, log_name: str) -> None:
@@ -30,8 +38,9 @@ def _cli(args: list, out: Path, log_name: str) -> None:
     env = {**os.environ, 'OMP_NUM_THREADS': '1', 'MKL_NUM_THREADS': '1', 'OPENBLAS_NUM_THREADS': '1'}
     out.mkdir(parents=True, exist_ok=True)
     with open(out / log_name, 'w') as f:
-        rc = subprocess.run([sys.executable, '-m', 'matrix_core.cli.main', *args], stdout=f, stderr=subprocess.STDOUT,
-                            env=env).returncode
+        rc = subprocess.run(
+            [sys.executable, '-m', 'matrix_core.cli.main', *args], stdout=f, stderr=subprocess.STDOUT, env=env
+        ).returncode
     if rc != 0:
         tail = (out / log_name).read_text()[-600:]
         raise RuntimeError(f'matrix-tracker {args[0]} exited with {rc}; end of {out / log_name}:\n{tail}')
@@ -47,8 +56,17 @@ def scaled_calib_config(variant: str, width: int, height: int, path: Path) -> Pa
     scene = yaml.safe_load(default_config_path(f'sim_{variant}.yaml').read_text())
     (w0, h0), K = scene['image_size'], list(scene['intrinsics']['K'])
     sx, sy = width / w0, height / h0
-    scene['intrinsics']['K'] = [K[0] * sx, K[1] * sx, (K[2] + 0.5) * sx - 0.5, 0.0, K[4] * sy,
-                                (K[5] + 0.5) * sy - 0.5, 0.0, 0.0, 1.0]
+    scene['intrinsics']['K'] = [
+        K[0] * sx,
+        K[1] * sx,
+        (K[2] + 0.5) * sx - 0.5,
+        0.0,
+        K[4] * sy,
+        (K[5] + 0.5) * sy - 0.5,
+        0.0,
+        0.0,
+        1.0,
+    ]
     scene['image_size'] = [width, height]
     path.write_text(yaml.safe_dump(scene, sort_keys=False))
     return path
@@ -58,16 +76,42 @@ def run_calibrate(p: dict, out: Path, run_dir: Path, progress: bool, log) -> Non
     out.mkdir(parents=True, exist_ok=True)
     config = scaled_calib_config(p['variant'], *p['image_size'], out / 'calib_scene.yaml')
     # --write-stale: the pnp_stale source uses the stale frames' last good poses (as the live node republishes them)
-    _cli(['calibrate', str(run_dir / p['dataset']), '--out', str(out), '--config', str(config), '--compare',
-          '--write-stale'], out, 'calibrate.log')
+    _cli(
+        [
+            'calibrate',
+            str(run_dir / p['dataset']),
+            '--out',
+            str(out),
+            '--config',
+            str(config),
+            '--compare',
+            '--write-stale',
+        ],
+        out,
+        'calibrate.log',
+    )
 
 
 def run_register(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
     # The registration defaults are tuned on 1920x1080 (scale 0.25 = 480x270): keep that working size.
     # estimator/seed: magsac (the live default) or one seeded plain-RANSAC run (run-to-run variation).
     scale = min(1.0, 0.25 * 1920 / p['image_size'][0])
-    _cli(['register', str(run_dir / p['dataset']), '--out', str(out), '--scale', f'{scale:g}',
-          '--estimator', p.get('estimator', 'magsac'), '--seed', str(p.get('seed', 0))], out, 'register.log')
+    _cli(
+        [
+            'register',
+            str(run_dir / p['dataset']),
+            '--out',
+            str(out),
+            '--scale',
+            f'{scale:g}',
+            '--estimator',
+            p.get('estimator', 'magsac'),
+            '--seed',
+            str(p.get('seed', 0)),
+        ],
+        out,
+        'register.log',
+    )
 
 
 def _sequence_spec(p: dict, run_dir: Path):
@@ -93,8 +137,17 @@ def initialise_from(init_checkpoint: Path, config, out: Path) -> None:
     rng = torch.get_rng_state()
     model.load_state_dict(ckpt['model'])
     optimizer = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay)
-    save_checkpoint(out / 'last.pt', model, config.bev, optimizer=optimizer.state_dict(), epoch=0, history=[],
-                    best=-math.inf, torch_rng=rng, initialised_from=str(init_checkpoint))
+    save_checkpoint(
+        out / 'last.pt',
+        model,
+        config.bev,
+        optimizer=optimizer.state_dict(),
+        epoch=0,
+        history=[],
+        best=-math.inf,
+        torch_rng=rng,
+        initialised_from=str(init_checkpoint),
+    )
 
 
 def run_train(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
@@ -103,10 +156,19 @@ def run_train(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
     from matrix_core.bev.settings import BevSettings
     from matrix_core.bev.training import train
 
-    config = TrainConfig(train=[_sequence_spec(p, run_dir)], bev=BevSettings(**p['bev']), epochs=p['epochs'],
-                         lr=p['lr'], lr_schedule=p['lr_schedule'], batch_size=p['batch_size'], seed=p['seed'],
-                         max_steps_per_epoch=p['max_steps_per_epoch'], num_threads=torch.get_num_threads(),
-                         augment=AugmentConfig(enabled=bool(p.get('augment', False))), out_dir=str(out))
+    config = TrainConfig(
+        train=[_sequence_spec(p, run_dir)],
+        bev=BevSettings(**p['bev']),
+        epochs=p['epochs'],
+        lr=p['lr'],
+        lr_schedule=p['lr_schedule'],
+        batch_size=p['batch_size'],
+        seed=p['seed'],
+        max_steps_per_epoch=p['max_steps_per_epoch'],
+        num_threads=torch.get_num_threads(),
+        augment=AugmentConfig(enabled=bool(p.get('augment', False))),
+        out_dir=str(out),
+    )
     if p['init'] and not (out / 'last.pt').is_file():
         out.mkdir(parents=True, exist_ok=True)
         initialise_from(run_dir / p['init'] / 'last.pt', config, out)
@@ -121,8 +183,10 @@ def run_evaluate(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None
     from matrix_core.bev.plots import save_trajectories_png
 
     if p['calibration'] not in CALIBRATION_SOURCES:
-        raise StepUnavailable(f'calibration source {p["calibration"]!r} does not exist in this checkout '
-                              f'(known: {sorted(CALIBRATION_SOURCES)})')
+        raise StepUnavailable(
+            f'calibration source {p["calibration"]!r} does not exist in this checkout '
+            f'(known: {sorted(CALIBRATION_SOURCES)})'
+        )
     kwargs = {}
     if p['calibration_dir']:
         if 'calibration_dir' not in inspect.signature(BevFrames).parameters:
@@ -133,15 +197,26 @@ def run_evaluate(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None
     data = BevFrames(run_dir / p['dataset'], settings, None, p['calibration'], p['views'], False, **kwargs)
     result = evaluate(model, data, progress=False)
     train_params = json.loads((run_dir / 'steps' / (str(Path(p['checkpoint']).parent) + '.started.json')).read_text())
-    record = {**p, 'trained': train_params, 'views_used': list(p['views'] or data.views),
-              'detection': result.detection.as_dict(), 'tracking': result.tracking.as_dict(),
-              'num_frames': len(data.frames), 'eval_s': time.perf_counter() - start,
-              'failures': result.failures_dict()}
+    record = {
+        **p,
+        'trained': train_params,
+        'views_used': list(p['views'] or data.views),
+        'detection': result.detection.as_dict(),
+        'tracking': result.tracking.as_dict(),
+        'num_frames': len(data.frames),
+        'eval_s': time.perf_counter() - start,
+        'failures': result.failures_dict(),
+    }
     out.mkdir(parents=True, exist_ok=True)
     (out / 'metrics.json').write_text(json.dumps(record, indent=2))
     if p['plot']:
-        save_trajectories_png(out / 'trajectories.png', result.gt, result.tracks, data.grid,
-                              f'{p["model"]} on the {p["test"]} test sequence ({p["calibration"]} calibration)')
+        save_trajectories_png(
+            out / 'trajectories.png',
+            result.gt,
+            result.tracks,
+            data.grid,
+            f'{p["model"]} on the {p["test"]} test sequence ({p["calibration"]} calibration)',
+        )
 
 
 def run_readers(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
@@ -156,5 +231,12 @@ def run_readers(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
 
 from matrix_core.experiments.real_live import run_live_real  # noqa: E402  (it imports StepUnavailable from here)
 
-EXECUTORS = {'simulate': run_simulate, 'calibrate': run_calibrate, 'register': run_register, 'train': run_train,
-             'evaluate': run_evaluate, 'readers': run_readers, 'live_graph': run_live_real}
+EXECUTORS = {
+    'simulate': run_simulate,
+    'calibrate': run_calibrate,
+    'register': run_register,
+    'train': run_train,
+    'evaluate': run_evaluate,
+    'readers': run_readers,
+    'live_graph': run_live_real,
+}

@@ -52,8 +52,12 @@ def foot_point_agreement(root) -> dict:
             continue
         uv = cam.project(np.c_[np.asarray(feet, float), np.zeros(len(feet))])
         error = np.linalg.norm(uv - np.asarray(boxes, float), axis=1)
-        views[view] = {'n': int(len(error)), 'behind_camera': int(np.isnan(error).sum()),
-                       'median_px': float(np.nanmedian(error)),
-                       'p90_px': float(np.nanpercentile(error, 90)), 'camera_height_m': float(cam.center[2]),
-                       'tilt_deg': float(cam.tilt_deg)}
+        views[view] = {
+            'n': int(len(error)),
+            'behind_camera': int(np.isnan(error).sum()),
+            'median_px': float(np.nanmedian(error)),
+            'p90_px': float(np.nanpercentile(error, 90)),
+            'camera_height_m': float(cam.center[2]),
+            'tilt_deg': float(cam.tilt_deg),
+        }
     return {'format': type(ds).__name__, 'frames': len(ds.annotated_frames), 'views': views}

@@ -72,7 +72,7 @@ class BevFuser:
     def __init__(self, settings: FuseSettings, model=None, bev_settings=None):
         self.settings = settings
         torch.set_num_threads(settings.threads)
-        cv2.setNumThreads(settings.threads)   # image decoding and resizing: no idle pool threads spinning
+        cv2.setNumThreads(settings.threads)  # image decoding and resizing: no idle pool threads spinning
         if model is None:
             model, bev_settings = load_model(settings.checkpoint_path(), settings.decode_overrides())
         self.model, self.bev_settings = model.to(settings.device).eval(), bev_settings
@@ -80,7 +80,7 @@ class BevFuser:
         self.input_size = (bev_settings.image_width, bev_settings.image_height)
         self.runner = SequenceRunner(self.model, bev_settings, self.grid)
         self.tracker = BevTracker(settings.tracker_settings())
-        self._temporal_lost = False   # prepare_next failed: the next frame reports the temporal reset
+        self._temporal_lost = False  # prepare_next failed: the next frame reports the temporal reset
         self.reset()
 
     def warm_up(self) -> float:
@@ -172,8 +172,12 @@ class BevFuser:
         t1 = time.perf_counter()
         heatmap = None
         if mask.any():
-            out = self.runner.step(self.frame_count, torch.from_numpy(images),
-                                   torch.from_numpy(fhs.astype(np.float32)), torch.from_numpy(mask))
+            out = self.runner.step(
+                self.frame_count,
+                torch.from_numpy(images),
+                torch.from_numpy(fhs.astype(np.float32)),
+                torch.from_numpy(mask),
+            )
             dets, heatmap = out.detections, out.heatmap
         else:
             self.runner.reset()  # the next frame has no valid previous features
@@ -197,9 +201,15 @@ class BevFuser:
             result = self.process(stamp, views)
         except (ValueError, RuntimeError) as exc:
             self.runner.reset()
-            result = FuseResult(stamp, BevDetections(np.zeros((0, 2)), np.zeros(0)), [], None,
-                                {v: ViewStatus(False, f'fusion failed: {exc}') for v in self.settings.views},
-                                {'total_s': time.perf_counter() - t0}, ['temporal'])
+            result = FuseResult(
+                stamp,
+                BevDetections(np.zeros((0, 2)), np.zeros(0)),
+                [],
+                None,
+                {v: ViewStatus(False, f'fusion failed: {exc}') for v in self.settings.views},
+                {'total_s': time.perf_counter() - t0},
+                ['temporal'],
+            )
         result.timing = {'decode_s': decode_s, **result.timing}
         return result
 
@@ -207,8 +217,17 @@ class BevFuser:
         out = []
         for t in self.tracker.update(dets):
             born = self._born.setdefault(t.track_id, self.frame_count)
-            out.append(TrackState(int(t.track_id), t.xy, t.velocity, float(t.score), self.frame_count - born,
-                                  int(t.misses), t.detection_xy))
+            out.append(
+                TrackState(
+                    int(t.track_id),
+                    t.xy,
+                    t.velocity,
+                    float(t.score),
+                    self.frame_count - born,
+                    int(t.misses),
+                    t.detection_xy,
+                )
+            )
         alive = {tr.track_id for tr in self.tracker.tracks if tr.confirmed}
         self._born = {k: v for k, v in self._born.items() if k in alive}
         return out

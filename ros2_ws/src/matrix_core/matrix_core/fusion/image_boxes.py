@@ -31,30 +31,52 @@ from matrix_core.geometry.occlusion import as_boxes, segments_blocked
 from matrix_core.register.scene import scene_from_meta
 from matrix_core.register.settings import MATRIX_BLOCK
 
-OUTLINE_POINTS = 16          # points per circle of the cylinder's outline
+OUTLINE_POINTS = 16  # points per circle of the cylinder's outline
 
 
 @dataclass
 class ImageBoxSettings:
     """The person model and the visibility rule of the image boxes (module docstring)."""
 
-    person_radius_m: float = field(default=0.25, metadata={
-        'help': "radius of the person cylinder (m); MATRIX's annotation boxes use 0.16 m, but a wider box "
-                'tolerates the BEV position error (about 0.1 m) better: offline 2D precision / recall on the real '
-                'sample 91.7 / 88.1 percent at 0.25 m, 88.2 / 84.8 percent at 0.16 m'})
+    person_radius_m: float = field(
+        default=0.25,
+        metadata={
+            'help': "radius of the person cylinder (m); MATRIX's annotation boxes use 0.16 m, but a wider box "
+            'tolerates the BEV position error (about 0.1 m) better: offline 2D precision / recall on the real '
+            'sample 91.7 / 88.1 percent at 0.25 m, 88.2 / 84.8 percent at 0.16 m'
+        },
+    )
     person_height_m: float = field(default=1.75, metadata={'help': 'height of the person cylinder (m)'})
-    bottom_at_foot: bool = field(default=True, metadata={
-        'help': "the box runs from the cylinder's top down to the projected foot point (MATRIX's and the "
-                "simulator's annotation convention); false: to the bottom of the projected outline"})
-    visibility_heights_m: list[float] = field(default_factory=lambda: [0.05, 0.9], metadata={
-        'help': 'a person is hidden by an obstacle when the ray to its axis at any of these heights is blocked'})
-    min_in_image: float = field(default=0.5, metadata={
-        'help': "a person is reported when at least this fraction of its box's area is inside the image"})
-    person_occlusion: float = field(default=0.7, metadata={
-        'help': 'a box more than this fraction covered by boxes of people nearer the camera is marked occluded'})
-    obstacle_boxes: list[float] = field(default_factory=lambda: list(MATRIX_BLOCK), metadata={
-        'help': 'obstacles hiding people, groups of 5 numbers x0 y0 x1 y1 height (internal world metres); '
-                "default: the MATRIX central block (a simulated folder's own come from its meta)"})
+    bottom_at_foot: bool = field(
+        default=True,
+        metadata={
+            'help': "the box runs from the cylinder's top down to the projected foot point (MATRIX's and the "
+            "simulator's annotation convention); false: to the bottom of the projected outline"
+        },
+    )
+    visibility_heights_m: list[float] = field(
+        default_factory=lambda: [0.05, 0.9],
+        metadata={
+            'help': 'a person is hidden by an obstacle when the ray to its axis at any of these heights is blocked'
+        },
+    )
+    min_in_image: float = field(
+        default=0.5,
+        metadata={'help': "a person is reported when at least this fraction of its box's area is inside the image"},
+    )
+    person_occlusion: float = field(
+        default=0.7,
+        metadata={
+            'help': 'a box more than this fraction covered by boxes of people nearer the camera is marked occluded'
+        },
+    )
+    obstacle_boxes: list[float] = field(
+        default_factory=lambda: list(MATRIX_BLOCK),
+        metadata={
+            'help': 'obstacles hiding people, groups of 5 numbers x0 y0 x1 y1 height (internal world metres); '
+            "default: the MATRIX central block (a simulated folder's own come from its meta)"
+        },
+    )
 
     def __post_init__(self):
         if self.person_radius_m <= 0 or self.person_height_m <= 0:
@@ -62,7 +84,7 @@ class ImageBoxSettings:
         if not (0.0 < self.person_occlusion <= 1.0 and 0.0 < self.min_in_image <= 1.0):
             raise ValueError('person_occlusion and min_in_image must be in (0, 1]')
         as_boxes(self.obstacle_boxes)
-        if hasattr(super(), '__post_init__'):   # settings composed with others (the fuse node's)
+        if hasattr(super(), '__post_init__'):  # settings composed with others (the fuse node's)
             super().__post_init__()
 
 
@@ -98,9 +120,9 @@ def camera_from_ground_homography(img_H_ground, K, size: tuple) -> Camera:
 def cylinder_outline(xy, radius: float, height: float) -> np.ndarray:
     """(N, 2 * OUTLINE_POINTS, 3) world points of the base and top circles of cylinders at (N, 2) ``xy``."""
     a = np.linspace(0.0, 2 * np.pi, OUTLINE_POINTS, endpoint=False)
-    ring = np.stack([radius * np.cos(a), radius * np.sin(a)], axis=1)            # (P, 2)
+    ring = np.stack([radius * np.cos(a), radius * np.sin(a)], axis=1)  # (P, 2)
     xy = np.asarray(xy, dtype=np.float64).reshape(-1, 1, 2)
-    pts = np.concatenate([xy + ring, xy + ring], axis=1)                          # (N, 2P, 2)
+    pts = np.concatenate([xy + ring, xy + ring], axis=1)  # (N, 2P, 2)
     z = np.concatenate([np.zeros(OUTLINE_POINTS), np.full(OUTLINE_POINTS, height)])
     return np.concatenate([pts, np.broadcast_to(z[None, :, None], pts.shape[:2] + (1,))], axis=2)
 
@@ -125,15 +147,25 @@ def covered_fraction(box, others) -> float:
     area = box_area(box)[0]
     if area <= 0 or not len(others):
         return 0.0
-    o = np.column_stack([np.maximum(others[:, 0], box[0]), np.maximum(others[:, 1], box[1]),
-                         np.minimum(others[:, 2], box[2]), np.minimum(others[:, 3], box[3])])
+    o = np.column_stack(
+        [
+            np.maximum(others[:, 0], box[0]),
+            np.maximum(others[:, 1], box[1]),
+            np.minimum(others[:, 2], box[2]),
+            np.minimum(others[:, 3], box[3]),
+        ]
+    )
     o = o[(o[:, 2] > o[:, 0]) & (o[:, 3] > o[:, 1])]
     if not len(o):
         return 0.0
     xs, ys = np.unique(o[:, 0::2]), np.unique(o[:, 1::2])
     cx, cy = (xs[:-1] + xs[1:]) / 2, (ys[:-1] + ys[1:]) / 2
-    inside = ((cx[None, :, None] > o[:, 0, None, None]) & (cx[None, :, None] < o[:, 2, None, None])
-              & (cy[None, None, :] > o[:, 1, None, None]) & (cy[None, None, :] < o[:, 3, None, None])).any(axis=0)
+    inside = (
+        (cx[None, :, None] > o[:, 0, None, None])
+        & (cx[None, :, None] < o[:, 2, None, None])
+        & (cy[None, None, :] > o[:, 1, None, None])
+        & (cy[None, None, :] < o[:, 3, None, None])
+    ).any(axis=0)
     cells = np.diff(xs)[:, None] * np.diff(ys)[None, :]
     return float((cells * inside).sum() / area)
 
@@ -152,7 +184,7 @@ def image_boxes(camera: Camera, track_ids, xy, scores, settings: ImageBoxSetting
         return []
     outline = cylinder_outline(xy, s.person_radius_m, s.person_height_m).reshape(-1, 3)
     in_front = (camera.depth(outline) > 0).reshape(n, -1).all(axis=1)
-    uv = np.nan_to_num(camera.project(outline).reshape(n, -1, 2))   # behind the camera: dropped below
+    uv = np.nan_to_num(camera.project(outline).reshape(n, -1, 2))  # behind the camera: dropped below
     full = np.concatenate([uv.min(axis=1), uv.max(axis=1)], axis=1)
     foot = np.column_stack([xy, np.zeros(n)])
     if s.bottom_at_foot:
@@ -172,10 +204,11 @@ def image_boxes(camera: Camera, track_ids, xy, scores, settings: ImageBoxSetting
     # The union of the nearer boxes covers at most the sum of their overlaps: only boxes whose sum passes the
     # threshold need the exact union (most boxes in a crowd overlap little).
     near = boxes[order]
-    overlap = (np.clip(np.minimum(near[:, None, 2], near[None, :, 2]) - np.maximum(near[:, None, 0], near[None, :, 0]),
-                       0, None)
-               * np.clip(np.minimum(near[:, None, 3], near[None, :, 3]) - np.maximum(near[:, None, 1], near[None, :, 1]),
-                         0, None))
+    overlap = np.clip(
+        np.minimum(near[:, None, 2], near[None, :, 2]) - np.maximum(near[:, None, 0], near[None, :, 0]), 0, None
+    ) * np.clip(
+        np.minimum(near[:, None, 3], near[None, :, 3]) - np.maximum(near[:, None, 1], near[None, :, 1]), 0, None
+    )
     maybe = np.tril(overlap, -1).sum(axis=1) > s.person_occlusion * box_area(near)
     out = []
     for rank, k in enumerate(order):
@@ -201,6 +234,13 @@ def draw_image_boxes(image: np.ndarray, boxes, ids, occluded=None, thickness: in
         p0, p1 = tuple(int(round(c)) for c in b[:2]), tuple(int(round(c)) for c in b[2:])
         thin = occluded is not None and occluded[k]
         cv2.rectangle(img, p0, p1, colour, max(1, round((1 if thin else thickness) * scale)))
-        cv2.putText(img, str(int(i)), (p0[0], max(p0[1] - int(8 * scale), int(30 * scale))),
-                    cv2.FONT_HERSHEY_SIMPLEX, 1.4 * scale, colour, max(1, round(thickness * scale)))
+        cv2.putText(
+            img,
+            str(int(i)),
+            (p0[0], max(p0[1] - int(8 * scale), int(30 * scale))),
+            cv2.FONT_HERSHEY_SIMPLEX,
+            1.4 * scale,
+            colour,
+            max(1, round(thickness * scale)),
+        )
     return img

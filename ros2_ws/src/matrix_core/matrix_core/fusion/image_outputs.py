@@ -16,8 +16,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from matrix_core.fusion.image_boxes import (ImageBoxSettings, image_boxes, implied_view_camera,
-                                            obstacles_from_meta)
+from matrix_core.fusion.image_boxes import ImageBoxSettings, image_boxes, implied_view_camera, obstacles_from_meta
 from matrix_core.message_fields import ConversionError, camera_from_camera_info, registration_from_msg
 from matrix_core.register.registration import RegistrationError
 
@@ -67,8 +66,7 @@ class ViewCameras:
         geometry message (or None); ``tracks``: TrackState-like (``track_id``, ``score``, ``detection_xy``
         or else ``xy``)."""
         ids = [t.track_id for t in tracks]
-        xy = np.reshape([t.xy if getattr(t, 'detection_xy', None) is None else t.detection_xy for t in tracks],
-                        (-1, 2))
+        xy = np.reshape([t.xy if getattr(t, 'detection_xy', None) is None else t.detection_xy for t in tracks], (-1, 2))
         scores = [t.score for t in tracks]
         out = {}
         for view, msg in geometry.items():

@@ -37,42 +37,80 @@ class FuseSettings(TrackerSettings):
     """Everything the fusion of N views needs. Seconds, metres. ``frame_interval_s`` (from the tracker
     settings) is the frame period of the streams."""
 
-    views: list[str] = field(default_factory=lambda: list(MATRIX_VIEWS), metadata={
-        'help': 'drones to fuse, in the order the network sees them'})
-    image_kind: str = field(default='raw', metadata={
-        'help': 'raw (sensor_msgs/Image on image_topic), compressed (CompressedImage on compressed_topic) or both'})
-    image_topic: str = field(default='{view}/' + topics.IMAGE_RAW, metadata={
-        'help': 'raw image topic pattern ({view}: the drone; relative names, see matrix_core.topics)'})
-    compressed_topic: str = field(default='{view}/' + topics.IMAGE_COMPRESSED, metadata={
-        'help': 'compressed image topic pattern'})
-    input_kind: str = field(default='homography', metadata={
-        'help': 'where each frame\'s ground homography comes from: homography (matrix_msgs/HomographyStamped, '
-                'h_img_to_ground, from register) or camera_info (CameraInfo p = K[R|t], from calib or the bag\'s '
-                'ground truth)'})
-    dropped_topic: str = field(default='', metadata={
-        'help': "pattern of a drone's notices of frames it did not send (std_msgs/Header; link_sender's "
-                "'{view}/" + topics.LINK_DROPPED + "'): the frame does not wait for that image; empty: none"})
-    homography_topic: str = field(default='{view}/' + topics.HOMOGRAPHY, metadata={
-        'help': 'HomographyStamped topic pattern'})
-    camera_info_topic: str = field(default='{view}/' + topics.CAMERA_INFO, metadata={'help': 'CameraInfo topic pattern'})
-    min_confidence: float = field(default=0.0, metadata={
-        'help': 'homographies with a lower registration confidence are treated as missing'})
-    checkpoint: str = field(default='', metadata={
-        'help': 'BEV model checkpoint (.pt): a path or the name of one shipped in matrix_core/bev/checkpoints (e.g. '
-                'detector_tiny_seed0.pt, the faster detector); empty: the shipped default detector_seed1.pt'})
+    views: list[str] = field(
+        default_factory=lambda: list(MATRIX_VIEWS),
+        metadata={'help': 'drones to fuse, in the order the network sees them'},
+    )
+    image_kind: str = field(
+        default='raw',
+        metadata={
+            'help': 'raw (sensor_msgs/Image on image_topic), compressed (CompressedImage on compressed_topic) or both'
+        },
+    )
+    image_topic: str = field(
+        default='{view}/' + topics.IMAGE_RAW,
+        metadata={'help': 'raw image topic pattern ({view}: the drone; relative names, see matrix_core.topics)'},
+    )
+    compressed_topic: str = field(
+        default='{view}/' + topics.IMAGE_COMPRESSED, metadata={'help': 'compressed image topic pattern'}
+    )
+    input_kind: str = field(
+        default='homography',
+        metadata={
+            'help': 'where each frame\'s ground homography comes from: homography (matrix_msgs/HomographyStamped, '
+            'h_img_to_ground, from register) or camera_info (CameraInfo p = K[R|t], from calib or the bag\'s '
+            'ground truth)'
+        },
+    )
+    dropped_topic: str = field(
+        default='',
+        metadata={
+            'help': "pattern of a drone's notices of frames it did not send (std_msgs/Header; link_sender's "
+            "'{view}/" + topics.LINK_DROPPED + "'): the frame does not wait for that image; empty: none"
+        },
+    )
+    homography_topic: str = field(
+        default='{view}/' + topics.HOMOGRAPHY, metadata={'help': 'HomographyStamped topic pattern'}
+    )
+    camera_info_topic: str = field(
+        default='{view}/' + topics.CAMERA_INFO, metadata={'help': 'CameraInfo topic pattern'}
+    )
+    min_confidence: float = field(
+        default=0.0, metadata={'help': 'homographies with a lower registration confidence are treated as missing'}
+    )
+    checkpoint: str = field(
+        default='',
+        metadata={
+            'help': 'BEV model checkpoint (.pt): a path or the name of one shipped in matrix_core/bev/checkpoints (e.g. '
+            'detector_tiny_seed0.pt, the faster detector); empty: the shipped default detector_seed1.pt'
+        },
+    )
     device: str = field(default='cpu', metadata={'help': 'torch device (the BEV runner decodes on the CPU)'})
     threads: int = field(default=1, metadata={'help': 'torch and OpenCV CPU threads (1: one core, as benchmarked)'})
-    area: list[float] = field(default_factory=lambda: list(MATRIX_AREA), metadata={
-        'help': 'scene x_min y_min x_max y_max (m) when the checkpoint has no area; the grid adds its margin'})
-    score_threshold: float = field(default=-1.0, metadata={
-        'help': 'heatmap peak threshold; negative: the checkpoint\'s'})
+    area: list[float] = field(
+        default_factory=lambda: list(MATRIX_AREA),
+        metadata={
+            'help': 'scene x_min y_min x_max y_max (m) when the checkpoint has no area; the grid adds its margin'
+        },
+    )
+    score_threshold: float = field(
+        default=-1.0, metadata={'help': 'heatmap peak threshold; negative: the checkpoint\'s'}
+    )
     nms_radius_m: float = field(default=-1.0, metadata={'help': 'NMS radius (m); negative: the checkpoint\'s'})
-    sync_timeout: float = field(default=1.0, metadata={
-        'help': 'seconds to wait for missing views after a frame\'s first message (a stopped drone never stalls)'})
-    temporal_reset_gap_s: float = field(default=0.75, metadata={
-        'help': 'forget the previous BEV features when frames are further apart than this (a lost frame)'})
-    tracker_reset_gap_s: float = field(default=5.0, metadata={
-        'help': 'reset the tracker (ids restart) when frames are further apart than this or time goes back'})
+    sync_timeout: float = field(
+        default=1.0,
+        metadata={
+            'help': 'seconds to wait for missing views after a frame\'s first message (a stopped drone never stalls)'
+        },
+    )
+    temporal_reset_gap_s: float = field(
+        default=0.75,
+        metadata={'help': 'forget the previous BEV features when frames are further apart than this (a lost frame)'},
+    )
+    tracker_reset_gap_s: float = field(
+        default=5.0,
+        metadata={'help': 'reset the tracker (ids restart) when frames are further apart than this or time goes back'},
+    )
 
     def __post_init__(self):
         super().__post_init__()
@@ -104,5 +142,6 @@ class FuseSettings(TrackerSettings):
 
     def decode_overrides(self) -> dict:
         """Decoding settings that replace the checkpoint's (only those set >= 0)."""
-        return {k: v for k, v in (('score_threshold', self.score_threshold), ('nms_radius_m', self.nms_radius_m))
-                if v >= 0}
+        return {
+            k: v for k, v in (('score_threshold', self.score_threshold), ('nms_radius_m', self.nms_radius_m)) if v >= 0
+        }

@@ -19,13 +19,18 @@ from dataclasses import dataclass
 
 from matrix_core.bev.data import prepare_image
 from matrix_core.fusion.views import ViewInput, ViewInputError, at_reduced_resolution, check_image, jpeg_reduction
-from matrix_core.message_fields import (ConversionError, camera_from_camera_info, image_from_msg, is_jpeg,
-                                        registration_from_msg)
+from matrix_core.message_fields import (
+    ConversionError,
+    camera_from_camera_info,
+    image_from_msg,
+    is_jpeg,
+    registration_from_msg,
+)
 from matrix_core.register.registration import STATUS_FAILED, RegistrationError
 
 
 NOT_SENT = 'no image: dropped at the sender (link budget)'
-EARLY_KEPT = 64   # early decodes kept for frames not fused yet (8 views x 8 frames); the oldest go first
+EARLY_KEPT = 64  # early decodes kept for frames not fused yet (8 views x 8 frames); the oldest go first
 
 
 @dataclass(frozen=True)
@@ -60,9 +65,9 @@ class ViewInputs:
 
     def __init__(self, input_size: tuple, min_confidence: float, reduced_decode: bool):
         self.input_size, self.min_confidence, self.reduced_decode = input_size, min_confidence, reduced_decode
-        self.full_size = {}   # view -> (w, h) of its last fully decoded image
-        self._early = {}      # id(msg) -> (msg, (image, r, full size), network input): made on arrival, not used yet
-        self._deferred = {}   # id(msg) -> (view, msg): arrived while an earlier frame waited, not decoded yet
+        self.full_size = {}  # view -> (w, h) of its last fully decoded image
+        self._early = {}  # id(msg) -> (msg, (image, r, full size), network input): made on arrival, not used yet
+        self._deferred = {}  # id(msg) -> (view, msg): arrived while an earlier frame waited, not decoded yet
 
     def decode_early(self, view: str, msg, defer: bool = False) -> None:
         """Decode ``msg``, one of ``view``'s images, now; :meth:`view_input` takes it from here. A message that
@@ -79,7 +84,7 @@ class ViewInputs:
             network_image = prepare_image(check_image(decoded[0]), self.input_size)
         except (ViewInputError, ConversionError):
             return
-        self._early[id(msg)] = (msg, decoded, network_image)   # the message kept: its id stays unique
+        self._early[id(msg)] = (msg, decoded, network_image)  # the message kept: its id stays unique
         while len(self._early) > EARLY_KEPT:
             del self._early[next(iter(self._early))]
 
@@ -94,8 +99,9 @@ class ViewInputs:
         None when no view has an image at all (e.g. geometry history replayed after a restart): nothing to see."""
         if not any(f'{v}/image' in items for v in views):
             return None
-        return {v: self.view_input(v, items.get(f'{v}/image'), items.get(f'{v}/geometry'), geometry_name)
-                for v in views}
+        return {
+            v: self.view_input(v, items.get(f'{v}/image'), items.get(f'{v}/geometry'), geometry_name) for v in views
+        }
 
     def view_input(self, view: str, image_msg, geometry_msg, geometry_name: str) -> ViewInput:
         """One view's :class:`ViewInput`; any problem becomes its reason. ``geometry_name`` names the missing
@@ -103,10 +109,12 @@ class ViewInputs:
         if isinstance(image_msg, ImageNotSent):
             return ViewInput(reason=NOT_SENT)
         _, early, network_image = self._early.pop(id(image_msg), (None, None, None))
-        self._deferred.pop(id(image_msg), None)   # its frame came before its deferred decode: decoded below
+        self._deferred.pop(id(image_msg), None)  # its frame came before its deferred decode: decoded below
         if image_msg is None or geometry_msg is None:
-            return ViewInput(reason='no ' + ' and no '.join(
-                p for p, x in (('image', image_msg), (geometry_name, geometry_msg)) if x is None))
+            return ViewInput(
+                reason='no '
+                + ' and no '.join(p for p, x in (('image', image_msg), (geometry_name, geometry_msg)) if x is None)
+            )
         confidence, camera_size = None, None
         try:
             if hasattr(geometry_msg, 'h_img_to_ground'):
@@ -122,8 +130,12 @@ class ViewInputs:
                 raise ViewInputError('image is {}x{}, its camera_info is for {}x{}'.format(*full, *camera_size))
         except (ViewInputError, ConversionError) as exc:
             return ViewInput(reason=str(exc), confidence=confidence)
-        return ViewInput(image, img_H_ground if r == 1 else at_reduced_resolution(img_H_ground, r),
-                         confidence=confidence, network_image=network_image)
+        return ViewInput(
+            image,
+            img_H_ground if r == 1 else at_reduced_resolution(img_H_ground, r),
+            confidence=confidence,
+            network_image=network_image,
+        )
 
     def _decode(self, view: str, msg) -> tuple:
         """(image, r, (w, h) of the full image): the image decoded at 1/r, a JPEG at the smallest libjpeg scale

@@ -49,7 +49,7 @@ def check_image(image) -> np.ndarray:
     return image
 
 
-JPEG_REDUCTIONS = (8, 4, 2, 1)   # the scales libjpeg decodes to directly (cv2.IMREAD_REDUCED_COLOR_*)
+JPEG_REDUCTIONS = (8, 4, 2, 1)  # the scales libjpeg decodes to directly (cv2.IMREAD_REDUCED_COLOR_*)
 
 
 def jpeg_reduction(full_size: tuple, input_size: tuple) -> int:
@@ -65,4 +65,4 @@ def jpeg_reduction(full_size: tuple, input_size: tuple) -> int:
 def at_reduced_resolution(img_H_ground: np.ndarray, r: int) -> np.ndarray:
     """``img_H_ground`` of the full image -> the same for the image decoded at 1/r (pixel centres:
     u_small = (u_full + 0.5) / r - 0.5)."""
-    return pixel_scale_homography(1.0 / r, 1.0 / r) @ img_H_ground   # small_H_full
+    return pixel_scale_homography(1.0 / r, 1.0 / r) @ img_H_ground  # small_H_full

@@ -107,8 +107,7 @@ class Camera:
     def from_rvec_tvec(cls, K, rvec, tvec, width: int, height: int, dist=None) -> 'Camera':
         """Build from OpenCV's Rodrigues vector and translation (world -> camera, metres)."""
         R, _ = cv2.Rodrigues(np.asarray(rvec, dtype=np.float64).reshape(3, 1))
-        return cls(K, pose_matrix(R, np.reshape(tvec, 3)), width, height,
-                   np.zeros(5) if dist is None else dist)
+        return cls(K, pose_matrix(R, np.reshape(tvec, 3)), width, height, np.zeros(5) if dist is None else dist)
 
     @property
     def R(self) -> np.ndarray:
@@ -194,8 +193,12 @@ class Camera:
     def in_image(self, uv, margin: float = 0.0) -> np.ndarray:
         """(N,) bool: pixels inside the image (pixel-centre convention), shrunk by ``margin`` pixels."""
         uv = as_points(uv, 2, 'uv')
-        return ((uv[:, 0] >= -0.5 + margin) & (uv[:, 0] <= self.width - 0.5 - margin)
-                & (uv[:, 1] >= -0.5 + margin) & (uv[:, 1] <= self.height - 0.5 - margin))
+        return (
+            (uv[:, 0] >= -0.5 + margin)
+            & (uv[:, 0] <= self.width - 0.5 - margin)
+            & (uv[:, 1] >= -0.5 + margin)
+            & (uv[:, 1] <= self.height - 0.5 - margin)
+        )
 
     def ground_to_img(self, xy, plane_z: float = 0.0) -> np.ndarray:
         """(N, 2) world metres on the plane -> (N, 2) pixels via the plane homography (no distortion)."""

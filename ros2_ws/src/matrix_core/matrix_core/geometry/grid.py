@@ -61,5 +61,4 @@ class BevGrid:
     def contains(self, xy) -> np.ndarray:
         """(N,) bool: which world points fall inside the grid bounds."""
         xy = as_points(xy, 2, 'xy')
-        return ((xy[:, 0] >= self.x_min) & (xy[:, 0] < self.x_max)
-                & (xy[:, 1] >= self.y_min) & (xy[:, 1] < self.y_max))
+        return (xy[:, 0] >= self.x_min) & (xy[:, 0] < self.x_max) & (xy[:, 1] >= self.y_min) & (xy[:, 1] < self.y_max)

@@ -20,7 +20,7 @@ def quaternion_from_matrix(R: np.ndarray) -> np.ndarray:
         q = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1], 4.0 * w * w]) / (4.0 * w)
     else:
         j, k = (i + 1) % 3, (i + 2) % 3
-        s = np.sqrt(1.0 + R[i, i] - R[j, j] - R[k, k]) / 2.0   # the i-th component
+        s = np.sqrt(1.0 + R[i, i] - R[j, j] - R[k, k]) / 2.0  # the i-th component
         q = np.empty(4)
         q[i] = s
         q[j] = (R[j, i] + R[i, j]) / (4.0 * s)
@@ -37,6 +37,10 @@ def matrix_from_quaternion(q) -> np.ndarray:
     if not np.isfinite(norm) or norm == 0.0:
         raise ValueError(f'a quaternion needs 4 finite values, not all 0; got {q.tolist()}')
     x, y, z, w = q / norm
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )

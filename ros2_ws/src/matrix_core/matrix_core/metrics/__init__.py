@@ -4,5 +4,12 @@ from matrix_core.metrics.bev_points import BevPoints, read_bev_points, write_bev
 from matrix_core.metrics.detection import DetectionMetrics, detection_metrics
 from matrix_core.metrics.tracking import TrackingMetrics, tracking_metrics
 
-__all__ = ['BevPoints', 'read_bev_points', 'write_bev_points', 'DetectionMetrics', 'detection_metrics',
-           'TrackingMetrics', 'tracking_metrics']
+__all__ = [
+    'BevPoints',
+    'read_bev_points',
+    'write_bev_points',
+    'DetectionMetrics',
+    'detection_metrics',
+    'TrackingMetrics',
+    'tracking_metrics',
+]

@@ -69,6 +69,15 @@ def detection_metrics(gt: BevPoints, pred: BevPoints, threshold: float = 0.5) ->
         dist_sum += float(d[r, c].sum())
     num_gt = len(gt)
     return DetectionMetrics(
-        moda=1.0 - _ratio(fp + fn, num_gt), modp=_ratio(tp - dist_sum / threshold, tp),
-        precision=_ratio(tp, tp + fp), recall=_ratio(tp, num_gt), mean_error_m=_ratio(dist_sum, tp),
-        tp=tp, fp=fp, fn=fn, num_gt=num_gt, num_frames=len(frames), threshold=threshold)
+        moda=1.0 - _ratio(fp + fn, num_gt),
+        modp=_ratio(tp - dist_sum / threshold, tp),
+        precision=_ratio(tp, tp + fp),
+        recall=_ratio(tp, num_gt),
+        mean_error_m=_ratio(dist_sum, tp),
+        tp=tp,
+        fp=fp,
+        fn=fn,
+        num_gt=num_gt,
+        num_frames=len(frames),
+        threshold=threshold,
+    )

@@ -42,8 +42,9 @@ class FrameBoxes:
         object.__setattr__(self, 'views', np.asarray(self.views, dtype=str).reshape(-1))
         object.__setattr__(self, 'ids', np.asarray(self.ids, dtype=np.int64).reshape(-1))
         object.__setattr__(self, 'boxes', np.asarray(self.boxes, dtype=np.float64).reshape(-1, 4))
-        object.__setattr__(self, 'scores', np.ones(n) if self.scores is None
-                           else np.asarray(self.scores, dtype=np.float64).reshape(-1))
+        object.__setattr__(
+            self, 'scores', np.ones(n) if self.scores is None else np.asarray(self.scores, dtype=np.float64).reshape(-1)
+        )
         if not (len(self.views) == len(self.ids) == len(self.boxes) == len(self.scores) == n):
             raise ValueError('frames, views, ids, boxes and scores differ in length')
 
@@ -62,8 +63,9 @@ class FrameBoxes:
         parts = list(parts)
         if not parts:
             return cls(np.zeros(0), np.zeros(0, str), np.zeros(0), np.zeros((0, 4)))
-        return cls(*(np.concatenate([getattr(p, a) for p in parts]) for a in ('frames', 'views', 'ids', 'boxes',
-                                                                              'scores')))
+        return cls(
+            *(np.concatenate([getattr(p, a) for p in parts]) for a in ('frames', 'views', 'ids', 'boxes', 'scores'))
+        )
 
 
 class _Steps:
@@ -120,8 +122,10 @@ def format_view_table(metrics: dict) -> str:
     """One line per drone (and 'all'): boxes, precision, recall, MOTA, IDF1, ID switches, in percent."""
     lines = [f'{"drone":>5} {"gt":>6} {"pred":>6} {"prec%":>7} {"rec%":>7} {"MOTA%":>7} {"IDF1%":>7} {"IDsw":>5}']
     for v, m in metrics.items():
-        lines.append(f'{v:>5} {m.num_gt:6d} {m.num_pred:6d} {100 * m.precision:7.2f} {100 * m.recall:7.2f} '
-                     f'{100 * m.mota:7.2f} {100 * m.idf1:7.2f} {m.id_switches:5d}')
+        lines.append(
+            f'{v:>5} {m.num_gt:6d} {m.num_pred:6d} {100 * m.precision:7.2f} {100 * m.recall:7.2f} '
+            f'{100 * m.mota:7.2f} {100 * m.idf1:7.2f} {m.id_switches:5d}'
+        )
     return '\n'.join(lines)
 
 
@@ -131,8 +135,10 @@ def write_mot_boxes(path, boxes: FrameBoxes) -> None:
     lines = []
     for i in order:
         x0, y0, x1, y1 = boxes.boxes[i]
-        lines.append(f'{boxes.frames[i]},{boxes.ids[i]},{x0:.2f},{y0:.2f},{x1 - x0:.2f},{y1 - y0:.2f},'
-                     f'{boxes.scores[i]:.4f},{boxes.views[i]}')
+        lines.append(
+            f'{boxes.frames[i]},{boxes.ids[i]},{x0:.2f},{y0:.2f},{x1 - x0:.2f},{y1 - y0:.2f},'
+            f'{boxes.scores[i]:.4f},{boxes.views[i]}'
+        )
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     Path(path).write_text(''.join(line + '\n' for line in lines))
 
@@ -143,5 +149,10 @@ def read_mot_boxes(path) -> FrameBoxes:
     if any(len(r) != 8 for r in rows):
         raise ValueError(f'{path}: expected lines frame,id,x,y,w,h,score,drone')
     xywh = np.array([[float(v) for v in r[2:6]] for r in rows]).reshape(-1, 4)
-    return FrameBoxes([int(r[0]) for r in rows], [r[7] for r in rows], [int(r[1]) for r in rows],
-                      np.column_stack([xywh[:, :2], xywh[:, :2] + xywh[:, 2:]]), [float(r[6]) for r in rows])
+    return FrameBoxes(
+        [int(r[0]) for r in rows],
+        [r[7] for r in rows],
+        [int(r[1]) for r in rows],
+        np.column_stack([xywh[:, :2], xywh[:, :2] + xywh[:, 2:]]),
+        [float(r[6]) for r in rows],
+    )

@@ -14,20 +14,34 @@ def format_metrics(det: DetectionMetrics = None, trk: TrackingMetrics = None) ->
     """Aligned ``name  value`` lines; rates in percent, distances in metres, counts as integers."""
     rows = []
     if det is not None:
-        rows += [(f'MODA (@{det.threshold:g} m)', _pct(det.moda)), ('MODP', _pct(det.modp)),
-                 ('precision', _pct(det.precision)), ('recall', _pct(det.recall)),
-                 ('mean error of TP', f'{det.mean_error_m:6.3f} m'),
-                 ('TP / FP / FN', f'{det.tp} / {det.fp} / {det.fn}'),
-                 ('ground-truth points / frames', f'{det.num_gt} / {det.num_frames}')]
+        rows += [
+            (f'MODA (@{det.threshold:g} m)', _pct(det.moda)),
+            ('MODP', _pct(det.modp)),
+            ('precision', _pct(det.precision)),
+            ('recall', _pct(det.recall)),
+            ('mean error of TP', f'{det.mean_error_m:6.3f} m'),
+            ('TP / FP / FN', f'{det.tp} / {det.fp} / {det.fn}'),
+            ('ground-truth points / frames', f'{det.num_gt} / {det.num_frames}'),
+        ]
     if trk is not None:
-        rows += [(f'MOTA (@{trk.gate:g} m)', _pct(trk.mota)), ('MOTP (mean distance)', f'{trk.motp_m:6.3f} m'),
-                 ('MOTP (TrackTacular %)', f'{trk.motp_percent:6.2f} %'), ('IDF1', _pct(trk.idf1)),
-                 ('IDP / IDR', f'{_pct(trk.idp).strip()} / {_pct(trk.idr).strip()}'),
-                 ('MT / PT / ML', f'{trk.mostly_tracked} / {trk.partially_tracked} / {trk.mostly_lost} '
-                                  f'of {trk.num_gt_ids} ids'),
-                 ('MT / ML (% of ids)', f'{_pct(trk.mostly_tracked / max(trk.num_gt_ids, 1)).strip()} / '
-                                        f'{_pct(trk.mostly_lost / max(trk.num_gt_ids, 1)).strip()}'),
-                 ('ID switches', str(trk.id_switches)), ('fragmentations', str(trk.fragmentations)),
-                 ('FP / FN (tracking)', f'{trk.fp} / {trk.fn}')]
+        rows += [
+            (f'MOTA (@{trk.gate:g} m)', _pct(trk.mota)),
+            ('MOTP (mean distance)', f'{trk.motp_m:6.3f} m'),
+            ('MOTP (TrackTacular %)', f'{trk.motp_percent:6.2f} %'),
+            ('IDF1', _pct(trk.idf1)),
+            ('IDP / IDR', f'{_pct(trk.idp).strip()} / {_pct(trk.idr).strip()}'),
+            (
+                'MT / PT / ML',
+                f'{trk.mostly_tracked} / {trk.partially_tracked} / {trk.mostly_lost} of {trk.num_gt_ids} ids',
+            ),
+            (
+                'MT / ML (% of ids)',
+                f'{_pct(trk.mostly_tracked / max(trk.num_gt_ids, 1)).strip()} / '
+                f'{_pct(trk.mostly_lost / max(trk.num_gt_ids, 1)).strip()}',
+            ),
+            ('ID switches', str(trk.id_switches)),
+            ('fragmentations', str(trk.fragmentations)),
+            ('FP / FN (tracking)', f'{trk.fp} / {trk.fn}'),
+        ]
     width = max(len(name) for name, _ in rows) if rows else 0
     return '\n'.join(f'{name:<{width}}  {value}' for name, value in rows)

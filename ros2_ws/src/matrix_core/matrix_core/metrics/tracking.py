@@ -78,9 +78,9 @@ def tracking_metrics(gt: BevPoints, pred: BevPoints, gate: float = 1.0, costs=No
         raise ValueError(f'gate must be positive, got {gate}')
     gt_rows, pred_rows = gt.by_frame(), pred.by_frame()
     frames = sorted(set(gt_rows) | set(pred_rows))
-    last_match = {}          # gt id -> track id it was matched to most recently
-    matched_frames = {}      # gt id -> list of bools, one per appearance
-    within_gate = {}         # (gt id, track id) -> frames with distance <= gate (for IDF1)
+    last_match = {}  # gt id -> track id it was matched to most recently
+    matched_frames = {}  # gt id -> list of bools, one per appearance
+    within_gate = {}  # (gt id, track id) -> frames with distance <= gate (for IDF1)
     fp = fn = switches = matches = 0
     dist_sum = 0.0
     empty = np.zeros(0, dtype=int)
@@ -125,20 +125,34 @@ def tracking_metrics(gt: BevPoints, pred: BevPoints, gate: float = 1.0, costs=No
     for m in matched_frames.values():
         hit = np.flatnonzero(m)
         if len(hit):
-            span = np.asarray(m[hit[0]:hit[-1] + 1], dtype=int)
+            span = np.asarray(m[hit[0] : hit[-1] + 1], dtype=int)
             frag += int(np.sum(np.diff(span) == -1))
     idtp = _global_id_true_positives(gt, pred, within_gate)
     detections = matches + switches
     motp = _ratio(dist_sum, detections)
     return TrackingMetrics(
-        mota=1.0 - _ratio(fn + fp + switches, len(gt)), motp_m=float(motp), motp_percent=float(100.0 * (1.0 - motp / gate)),
-        idf1=_ratio(2 * idtp, len(gt) + len(pred)), idp=_ratio(idtp, len(pred)), idr=_ratio(idtp, len(gt)),
-        precision=_ratio(detections, detections + fp), recall=_ratio(detections, len(gt)),
+        mota=1.0 - _ratio(fn + fp + switches, len(gt)),
+        motp_m=float(motp),
+        motp_percent=float(100.0 * (1.0 - motp / gate)),
+        idf1=_ratio(2 * idtp, len(gt) + len(pred)),
+        idp=_ratio(idtp, len(pred)),
+        idr=_ratio(idtp, len(gt)),
+        precision=_ratio(detections, detections + fp),
+        recall=_ratio(detections, len(gt)),
         mostly_tracked=int(sum(r >= 0.8 for r in ratios.values())),
         partially_tracked=int(sum(0.2 <= r < 0.8 for r in ratios.values())),
-        mostly_lost=int(sum(r < 0.2 for r in ratios.values())), num_gt_ids=len(ratios),
-        id_switches=switches, fragmentations=frag, fp=fp, fn=fn, matches=matches,
-        num_gt=len(gt), num_pred=len(pred), num_frames=len(frames), gate=gate)
+        mostly_lost=int(sum(r < 0.2 for r in ratios.values())),
+        num_gt_ids=len(ratios),
+        id_switches=switches,
+        fragmentations=frag,
+        fp=fp,
+        fn=fn,
+        matches=matches,
+        num_gt=len(gt),
+        num_pred=len(pred),
+        num_frames=len(frames),
+        gate=gate,
+    )
 
 
 def _global_id_true_positives(gt: BevPoints, pred: BevPoints, within_gate: dict) -> int:

@@ -26,13 +26,15 @@ def settings_for_width(settings: RegisterSettings, width: int) -> RegisterSettin
     """``settings`` (chosen for 1920-px images) for images ``width`` px wide: same feature-image size and
     the same inlier threshold in full-resolution-equivalent pixels."""
     factor = FULL_WIDTH / width
-    return replace(settings, scale=min(1.0, settings.scale * factor),
-                   track_refine_scale=min(1.0, settings.track_refine_scale * factor),
-                   ransac_threshold_px=settings.ransac_threshold_px / factor)
+    return replace(
+        settings,
+        scale=min(1.0, settings.scale * factor),
+        track_refine_scale=min(1.0, settings.track_refine_scale * factor),
+        ransac_threshold_px=settings.ransac_threshold_px / factor,
+    )
 
 
-def acceptance_run(dataset, settings: RegisterSettings = None, views=None, frames=None,
-                   progress: bool = False) -> dict:
+def acceptance_run(dataset, settings: RegisterSettings = None, views=None, frames=None, progress: bool = False) -> dict:
     """Register ``frames`` (default all) of ``views`` (default all) of a MATRIX folder with a ``reference/``.
 
     Returns a dict: ``pairs``, ``failed`` ({'D1/7': reason}), ``errors_px`` (list, full-resolution-equivalent
@@ -64,13 +66,25 @@ def acceptance_run(dataset, settings: RegisterSettings = None, views=None, frame
                 tracked += r.message.startswith('tracked')
                 anchors_by_flow += r.message.startswith('anchor by flow')
                 if r.ok:
-                    errors.append(factor * homography_error_px(r.ref_H_img, dataset.camera(view, frame), ref,
-                                                               dataset.area, settings.exclude_boxes))
+                    errors.append(
+                        factor
+                        * homography_error_px(
+                            r.ref_H_img, dataset.camera(view, frame), ref, dataset.area, settings.exclude_boxes
+                        )
+                    )
                 else:
                     failed[f'{view}/{frame}'] = r.message
                 bar.update()
-    return {'pairs': len(seconds), 'failed': failed, 'errors_px': errors,
-            'error_px_median': float(np.median(errors)) if errors else float('nan'),
-            'error_px_max': float(np.max(errors)) if errors else float('nan'),
-            'seconds_median': float(np.median(seconds)) if seconds else float('nan'),
-            'cpu_seconds': cpu, 'tracked': tracked, 'anchors_by_flow': anchors_by_flow, 'width': width, 'settings': settings}
+    return {
+        'pairs': len(seconds),
+        'failed': failed,
+        'errors_px': errors,
+        'error_px_median': float(np.median(errors)) if errors else float('nan'),
+        'error_px_max': float(np.max(errors)) if errors else float('nan'),
+        'seconds_median': float(np.median(seconds)) if seconds else float('nan'),
+        'cpu_seconds': cpu,
+        'tracked': tracked,
+        'anchors_by_flow': anchors_by_flow,
+        'width': width,
+        'settings': settings,
+    }

@@ -48,12 +48,12 @@ class GfttAffNetBackend:
         import kornia.feature as KF
 
         torch.set_num_threads(1)
-        require_checkpoint(AFFNET_FILE, f'The gftt_affnet_{descriptor} backend (AffNet affine shape)',
-                           'shared/weights/AffNet.pth')
+        require_checkpoint(
+            AFFNET_FILE, f'The gftt_affnet_{descriptor} backend (AffNet affine shape)', 'shared/weights/AffNet.pth'
+        )
         self.name = f'gftt_affnet_{descriptor}'
         self.scale = scale
-        self._descriptor = KF.LAFDescriptor(_patch_descriptor(descriptor), patch_size=32,
-                                            grayscale_descriptor=True)
+        self._descriptor = KF.LAFDescriptor(_patch_descriptor(descriptor), patch_size=32, grayscale_descriptor=True)
         self._kf = KF
         self._detectors = {}
 
@@ -64,11 +64,15 @@ class GfttAffNetBackend:
 
             KF = self._kf
             self._detectors[num_features] = KF.ScaleSpaceDetector(
-                num_features, resp_module=KF.CornerGFTT(),
+                num_features,
+                resp_module=KF.CornerGFTT(),
                 scale_pyr_module=ScalePyramid(3, 1.6, 32, double_image=True, extra_levels=2),
                 ori_module=KF.LAFOrienter(19),
                 aff_module=KF.LAFAffNetShapeEstimator(True, preserve_orientation=False).eval(),
-                scale_space_response=False, minima_are_also_good=False, mr_size=6.0).eval()
+                scale_space_response=False,
+                minima_are_also_good=False,
+                mr_size=6.0,
+            ).eval()
         return self._detectors[num_features]
 
     def extract(self, image: np.ndarray, max_features: int, mask: np.ndarray = None) -> Features:

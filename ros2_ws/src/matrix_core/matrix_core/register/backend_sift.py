@@ -32,7 +32,7 @@ class SiftBackend:
         gray = resize(to_gray(image), self.scale)
         sift = cv2.SIFT_create(nfeatures=int(max_features), contrastThreshold=self.contrast_threshold)
         x0 = y0 = 0
-        if mask is not None:   # SIFT on the mask's bounding box (plus context), features inside the mask
+        if mask is not None:  # SIFT on the mask's bounding box (plus context), features inside the mask
             mask = mask_at(mask, gray.shape)
             rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
             if not len(rows):

@@ -13,8 +13,7 @@ def gt_cur_to_ref(cur: Camera, ref: Camera) -> np.ndarray:
     return H / H[2, 2]
 
 
-def homography_error_px(ref_H_img: np.ndarray, cur: Camera, ref: Camera, area, boxes=(),
-                        step_m: float = 0.5) -> float:
+def homography_error_px(ref_H_img: np.ndarray, cur: Camera, ref: Camera, area, boxes=(), step_m: float = 0.5) -> float:
     """Mean distance in full-resolution reference pixels between ``ref_H_img`` and the ground truth,
     over a ``step_m`` grid of ground points of ``area`` visible (ground, not behind ``boxes``) in ``cur``.
     """

@@ -48,8 +48,8 @@ def registration_to_record(registration: Registration) -> dict:
     record = registration.to_dict()
     record['H_cur_to_ref'] = record['H_img_to_ground'] = None
     if registration.ok:
-        pix = _affine_of(conv.pixels_to_file)          # internal pixels -> file pixels
-        world = _affine_of(conv.world_to_file)         # internal ground metres -> file ground metres
+        pix = _affine_of(conv.pixels_to_file)  # internal pixels -> file pixels
+        world = _affine_of(conv.world_to_file)  # internal ground metres -> file ground metres
         record['H_cur_to_ref'] = _normalised(pix @ registration.ref_H_img @ np.linalg.inv(pix)).tolist()
         record['H_img_to_ground'] = _normalised(world @ registration.ground_H_img @ np.linalg.inv(pix)).tolist()
     return record
@@ -58,15 +58,28 @@ def registration_to_record(registration: Registration) -> dict:
 def registration_from_record(record: dict, where: str = 'record') -> Registration:
     """A record of :func:`registration_to_record` -> Registration in internal frames. A record that says
     ``ok`` but holds no usable homography comes back failed, saying why (``where`` names the file)."""
-    values = {k: record.get(k, d) for k, d in (('confidence', 0.0), ('matches', 0), ('inliers', 0),
-                                                ('reference_id', ''), ('backend', ''), ('seconds', 0.0))}
+    values = {
+        k: record.get(k, d)
+        for k, d in (
+            ('confidence', 0.0),
+            ('matches', 0),
+            ('inliers', 0),
+            ('reference_id', ''),
+            ('backend', ''),
+            ('seconds', 0.0),
+        )
+    }
     error = record.get('inlier_error_px')
     values['inlier_error_px'] = float('nan') if error is None else float(error)
     if record.get('status') != STATUS_OK:
         return Registration.failed(record.get('message', '') or f'{where}: status {record.get("status")!r}', **values)
     try:
-        ground = check_homography(conv.ground_homography_from_file(
-            check_homography(record.get('H_img_to_ground'), f'{where}: H_img_to_ground')), f'{where}: H_img_to_ground')
+        ground = check_homography(
+            conv.ground_homography_from_file(
+                check_homography(record.get('H_img_to_ground'), f'{where}: H_img_to_ground')
+            ),
+            f'{where}: H_img_to_ground',
+        )
         pix = _affine_of(conv.pixels_to_file)
         ref = np.linalg.inv(pix) @ check_homography(record.get('H_cur_to_ref'), f'{where}: H_cur_to_ref') @ pix
     except (RegistrationError, TypeError) as exc:
@@ -88,5 +101,5 @@ def read_registration(folder, view: str, frame: int):
         return Registration.failed(f'{path}: {BROKEN_RECORD[1]}: not a JSON object')
     try:
         return registration_from_record(record, str(path))
-    except (TypeError, ValueError) as exc:   # e.g. a number field holding text
+    except (TypeError, ValueError) as exc:  # e.g. a number field holding text
         return Registration.failed(f'{path}: {BROKEN_RECORD[1]}: {exc}')

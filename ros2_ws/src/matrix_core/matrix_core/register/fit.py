@@ -56,13 +56,20 @@ def plain_ransac_params(threshold_px: float, max_iters: int, confidence: float, 
     p.threshold, p.confidence, p.maxIterations = float(threshold_px), float(confidence), int(max_iters)
     p.sampler, p.score = cv2.SAMPLING_UNIFORM, cv2.SCORE_METHOD_RANSAC
     p.loMethod, p.final_polisher = cv2.LOCAL_OPTIM_NULL, cv2.LSQ_POLISHER
-    p.randomGeneratorState = int(seed) % 2**32   # an unsigned 32-bit state
-    p.isParallel = False                          # parallel USAC would not repeat
+    p.randomGeneratorState = int(seed) % 2**32  # an unsigned 32-bit state
+    p.isParallel = False  # parallel USAC would not repeat
     return p
 
 
-def fit_homography(src: np.ndarray, dst: np.ndarray, method: str = 'magsac', threshold_px: float = 3.0,
-                   max_iters: int = 5000, confidence: float = 0.999, seed: int = 0) -> HomographyFit:
+def fit_homography(
+    src: np.ndarray,
+    dst: np.ndarray,
+    method: str = 'magsac',
+    threshold_px: float = 3.0,
+    max_iters: int = 5000,
+    confidence: float = 0.999,
+    seed: int = 0,
+) -> HomographyFit:
     """Fit ``dst_H_src`` to (M, 2) correspondences ``src[k] -> dst[k]`` robustly.
 
     ``threshold_px`` is the inlier distance in ``dst`` pixels; ``seed`` the random state of ``ransac``
@@ -82,9 +89,10 @@ def fit_homography(src: np.ndarray, dst: np.ndarray, method: str = 'magsac', thr
         if method == 'ransac':
             H, mask = cv2.findHomography(src, dst, plain_ransac_params(threshold_px, max_iters, confidence, seed))
         else:
-            H, mask = cv2.findHomography(src, dst, cv2.USAC_MAGSAC, threshold_px, maxIters=max_iters,
-                                         confidence=confidence)
-    except cv2.error as exc:   # USAC raises on degenerate input where the flag API returns None
+            H, mask = cv2.findHomography(
+                src, dst, cv2.USAC_MAGSAC, threshold_px, maxIters=max_iters, confidence=confidence
+            )
+    except cv2.error as exc:  # USAC raises on degenerate input where the flag API returns None
         return HomographyFit(None, none, float('nan'), f'estimator failed: {str(exc).strip().splitlines()[-1]}')
     reason = is_valid_homography(H)
     if reason:

@@ -145,12 +145,14 @@ def _track(a: np.ndarray, b: np.ndarray, pa: np.ndarray, guess, window, levels, 
     ((N, 1, 2) positions in ``b``, (N,) bool tracked both ways and back within FORWARD_BACKWARD_PX; with
     ``backward`` false: tracked forward)."""
     flags = cv2.OPTFLOW_USE_INITIAL_FLOW if guess is not None else 0
-    pb, ok, _ = cv2.calcOpticalFlowPyrLK(a, b, pa, guess, winSize=window, maxLevel=levels, criteria=LK_CRITERIA,
-                                         flags=flags)
+    pb, ok, _ = cv2.calcOpticalFlowPyrLK(
+        a, b, pa, guess, winSize=window, maxLevel=levels, criteria=LK_CRITERIA, flags=flags
+    )
     if not backward:
         return pb, ok.ravel().astype(bool)
-    back, ok_back, _ = cv2.calcOpticalFlowPyrLK(b, a, pb, pa.copy(), winSize=window, maxLevel=levels,
-                                                criteria=LK_CRITERIA, flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
+    back, ok_back, _ = cv2.calcOpticalFlowPyrLK(
+        b, a, pb, pa.copy(), winSize=window, maxLevel=levels, criteria=LK_CRITERIA, flags=cv2.OPTFLOW_USE_INITIAL_FLOW
+    )
     fb = np.linalg.norm((back - pa).reshape(-1, 2), axis=1)
     return pb, ok.ravel().astype(bool) & ok_back.ravel().astype(bool) & (fb < FORWARD_BACKWARD_PX)
 
@@ -166,8 +168,15 @@ class FlowTracker:
         estimator: 'magsac' or 'ransac' (:func:`~matrix_core.register.fit.fit_homography`); seed: its seed.
     """
 
-    def __init__(self, scale: float, max_corners: int, threshold_px: float, estimator: str = 'magsac',
-                 seed: int = 0, refine_scale: float = None):
+    def __init__(
+        self,
+        scale: float,
+        max_corners: int,
+        threshold_px: float,
+        estimator: str = 'magsac',
+        seed: int = 0,
+        refine_scale: float = None,
+    ):
         self.scale = scale
         self.refine_scale = max(scale, refine_scale or scale)
         self.max_corners = max_corners
@@ -193,8 +202,17 @@ class FlowTracker:
         # against 1.5 ms for 4x), and the second halving costs 0.04 ms.
         return TrackImages(resize(refine, self.scale / self.refine_scale, scaled_size(gray.shape, self.scale)), refine)
 
-    def anchor(self, images: TrackImages, camera: Camera, ref_H_img: np.ndarray, chain: str, inliers: int,
-               area, margin_m: float, boxes) -> TrackState:
+    def anchor(
+        self,
+        images: TrackImages,
+        camera: Camera,
+        ref_H_img: np.ndarray,
+        chain: str,
+        inliers: int,
+        area,
+        margin_m: float,
+        boxes,
+    ) -> TrackState:
         """Start a chain at a fully registered frame: its ``images``, the camera its registration implies (full
         resolution) and the scene ground (``area`` grown by ``margin_m``, not behind ``boxes``). Corners are
         detected in the flow image."""
@@ -209,6 +227,7 @@ class FlowTracker:
 
     def step(self, state: TrackState, images: TrackImages) -> FlowStep:
         """Register the frame of ``images`` from ``state`` (flow, then refinement against the anchor)."""
+
         def failed(reason, prev_H_cur=None, tracked=0):
             return FlowStep(None, prev_H_cur, tracked, 0, float('nan'), None, reason)
 
@@ -220,11 +239,16 @@ class FlowTracker:
         guess = None
         if state.prev_H_cur is not None:  # constant motion: start where the last step would take the corners
             guess = cv2.perspectiveTransform(state.corners, S @ np.linalg.inv(state.prev_H_cur) @ F)
-        cur, good = _track(state.images.flow, images.flow, state.corners, guess, FLOW_WINDOW, FLOW_LEVELS,
-                           FLOW_BACKWARD_CHECK)
-        flow = fit_homography(apply_homography(F, cur.reshape(-1, 2)[good]),
-                              apply_homography(F, state.corners.reshape(-1, 2)[good]), self.estimator,
-                              self.threshold_px, seed=self.seed)
+        cur, good = _track(
+            state.images.flow, images.flow, state.corners, guess, FLOW_WINDOW, FLOW_LEVELS, FLOW_BACKWARD_CHECK
+        )
+        flow = fit_homography(
+            apply_homography(F, cur.reshape(-1, 2)[good]),
+            apply_homography(F, state.corners.reshape(-1, 2)[good]),
+            self.estimator,
+            self.threshold_px,
+            seed=self.seed,
+        )
         if flow.H is None:
             return failed(f'flow: {flow.reason}', tracked=int(good.sum()))
         predicted = state.anchor_H_img @ flow.H
@@ -246,11 +270,17 @@ class FlowTracker:
         F, S = self.full_H_refine, self.refine_H_full
         target = anchor.images.refine
         warped = cv2.warpPerspective(refine, S @ predicted @ F, target.shape[::-1], flags=cv2.INTER_LINEAR)
-        found, good = _track(target, warped, anchor.corners, anchor.corners.copy(), self.refine_window,
-                             self.refine_levels)
+        found, good = _track(
+            target, warped, anchor.corners, anchor.corners.copy(), self.refine_window, self.refine_levels
+        )
         xy_cur = apply_homography(np.linalg.inv(predicted) @ F, found.reshape(-1, 2)[good])
-        fit = fit_homography(xy_cur, apply_homography(F, anchor.corners.reshape(-1, 2)[good]), self.estimator,
-                             REFINE_THRESHOLD_PX, seed=self.seed)
+        fit = fit_homography(
+            xy_cur,
+            apply_homography(F, anchor.corners.reshape(-1, 2)[good]),
+            self.estimator,
+            REFINE_THRESHOLD_PX,
+            seed=self.seed,
+        )
         motion = np.linalg.norm((found - anchor.corners).reshape(-1, 2)[good], axis=1) / self.refine_scale
         moved = float(np.median(motion[fit.inliers])) if fit.H is not None and fit.inliers.any() else float('inf')
         return fit, good, xy_cur, moved

@@ -38,11 +38,21 @@ def shape_tolerance(max_shape_error: float, inliers, shape_inliers: int = 100) -
     return max_shape_error * float(np.sqrt(shape_inliers / max(int(inliers), 1)))
 
 
-def check_registration(ref_H_img: np.ndarray, K: np.ndarray, ref_img_H_ground: np.ndarray,
-                       ref_center: np.ndarray, ref_polygon: np.ndarray, previous_center=None,
-                       frames_since_previous: int = 1, max_shape_error: float = 0.08,
-                       max_area_ratio: float = 2.5, max_height_change_m: float = 4.0,
-                       max_step_m: float = 3.0, inliers: int = None, shape_inliers: int = 100):
+def check_registration(
+    ref_H_img: np.ndarray,
+    K: np.ndarray,
+    ref_img_H_ground: np.ndarray,
+    ref_center: np.ndarray,
+    ref_polygon: np.ndarray,
+    previous_center=None,
+    frames_since_previous: int = 1,
+    max_shape_error: float = 0.08,
+    max_area_ratio: float = 2.5,
+    max_height_change_m: float = 4.0,
+    max_step_m: float = 3.0,
+    inliers: int = None,
+    shape_inliers: int = 100,
+):
     """Run the gate. Returns (reason, implied camera): reason is '' when every check passes.
 
     Args:
@@ -57,11 +67,15 @@ def check_registration(ref_H_img: np.ndarray, K: np.ndarray, ref_img_H_ground: n
     cam = implied_camera(K, img_H_ground)
     tolerance = shape_tolerance(max_shape_error, inliers, shape_inliers)
     if cam.shape_error > tolerance:
-        return (f'gate: implied ground homography is not a rigid camera (shape error {cam.shape_error:.3f} '
-                f'> {tolerance:.3f} for {inliers} inliers)'), cam
+        return (
+            f'gate: implied ground homography is not a rigid camera (shape error {cam.shape_error:.3f} '
+            f'> {tolerance:.3f} for {inliers} inliers)'
+        ), cam
     if cam.center[2] <= 0 or abs(cam.center[2] - ref_center[2]) > max_height_change_m:
-        return (f'gate: implied camera height {cam.center[2]:.2f} m vs reference {ref_center[2]:.2f} m '
-                f'(max change {max_height_change_m} m)'), cam
+        return (
+            f'gate: implied camera height {cam.center[2]:.2f} m vs reference {ref_center[2]:.2f} m '
+            f'(max change {max_height_change_m} m)'
+        ), cam
     hom = np.c_[ref_polygon, np.ones(len(ref_polygon))] @ np.linalg.inv(ref_H_img).T
     if not (np.all(hom[:, 2] > 0) or np.all(hom[:, 2] < 0)):
         return 'gate: the horizon of the warped ground polygon crosses it', cam
@@ -71,6 +85,8 @@ def check_registration(ref_H_img: np.ndarray, K: np.ndarray, ref_img_H_ground: n
     if previous_center is not None:
         step = float(np.linalg.norm(cam.center - previous_center))
         if step > max_step_m * max(1, frames_since_previous):
-            return (f'gate: implied camera moved {step:.2f} m since the previous registered frame '
-                    f'(max {max_step_m} m per frame)'), cam
+            return (
+                f'gate: implied camera moved {step:.2f} m since the previous registered frame '
+                f'(max {max_step_m} m per frame)'
+            ), cam
     return '', cam

@@ -41,8 +41,12 @@ def ground_pixels(camera: Camera, xy: np.ndarray, area, margin_m: float = 0.0, b
     ground = camera.backproject_to_ground(xy)
     x0, y0, x1, y1 = area
     with np.errstate(invalid='ignore'):
-        keep = ((ground[:, 0] >= x0 - margin_m) & (ground[:, 0] <= x1 + margin_m)
-                & (ground[:, 1] >= y0 - margin_m) & (ground[:, 1] <= y1 + margin_m))
+        keep = (
+            (ground[:, 0] >= x0 - margin_m)
+            & (ground[:, 0] <= x1 + margin_m)
+            & (ground[:, 1] >= y0 - margin_m)
+            & (ground[:, 1] <= y1 + margin_m)
+        )
     keep[keep] = ~hidden_ground(camera, ground[keep, :2], boxes)
     return keep
 

@@ -42,12 +42,12 @@ def _mutual_exact(a: np.ndarray, b: np.ndarray):
     ab, ab1, ab2 = (np.empty(len(a), np.int64), np.empty(len(a), np.float32), np.empty(len(a), np.float32))
     ba, ba1, ba2 = np.full(len(b), -1), np.full(len(b), np.inf, np.float32), np.full(len(b), np.inf, np.float32)
     for lo in range(0, len(a), BLOCK):
-        blk = a[lo:lo + BLOCK]
+        blk = a[lo : lo + BLOCK]
         d = np.einsum('ij,ij->i', blk, blk)[:, None] + bb[None, :] - 2.0 * (blk @ b.T)
         np.maximum(d, 0.0, out=d)
-        col = d.copy()   # the row search marks its minima in d
-        ab[lo:lo + len(blk)], ab1[lo:lo + len(blk)], ab2[lo:lo + len(blk)] = _two_smallest(d, axis=1)
-        if len(blk) < 2:   # one row: its value is every column's best here; the second stays the running one
+        col = d.copy()  # the row search marks its minima in d
+        ab[lo : lo + len(blk)], ab1[lo : lo + len(blk)], ab2[lo : lo + len(blk)] = _two_smallest(d, axis=1)
+        if len(blk) < 2:  # one row: its value is every column's best here; the second stays the running one
             best, first, second = np.zeros(len(b), np.int64), col[0], np.full(len(b), np.inf, np.float32)
         else:
             best, first, second = _two_smallest(col, axis=0)
@@ -75,8 +75,7 @@ def _knn2(query: np.ndarray, train: np.ndarray, method: str):
     return best, d1, d2
 
 
-def match_symmetric(desc_a: np.ndarray, desc_b: np.ndarray, ratio: float = 0.8,
-                    method: str = 'flann') -> np.ndarray:
+def match_symmetric(desc_a: np.ndarray, desc_b: np.ndarray, ratio: float = 0.8, method: str = 'flann') -> np.ndarray:
     """Mutual-best matches that pass the ratio test in both directions.
 
     Args:
@@ -91,7 +90,7 @@ def match_symmetric(desc_a: np.ndarray, desc_b: np.ndarray, ratio: float = 0.8,
         if len(desc_a) < 2 or len(desc_b) < 2:
             return np.zeros((0, 2), np.int64)
         (ab, ab1, ab2), (ba, ba1, ba2) = _mutual_exact(desc_a, desc_b)
-        r2 = ratio * ratio   # squared distances: d1 < ratio * d2  <=>  d1^2 < ratio^2 * d2^2
+        r2 = ratio * ratio  # squared distances: d1 < ratio * d2  <=>  d1^2 < ratio^2 * d2^2
         i = np.flatnonzero(ab1 < r2 * ab2)
         keep = (ba[ab[i]] == i) & (ba1[ab[i]] < r2 * ba2[ab[i]])
         return np.stack([i[keep], ab[i][keep]], axis=1).astype(np.int64).reshape(-1, 2)

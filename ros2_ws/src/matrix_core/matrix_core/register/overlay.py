@@ -32,8 +32,17 @@ def _grid_lines(camera: Camera, area, step_m: float, samples: int = 60) -> list:
     return out
 
 
-def registration_overlay(current: np.ndarray, reference: np.ndarray, ref_H_img, ref_camera: Camera, area,
-                         title: str = '', scale: float = 0.5, tile_px: int = 64, grid_m: float = 1.0) -> np.ndarray:
+def registration_overlay(
+    current: np.ndarray,
+    reference: np.ndarray,
+    ref_H_img,
+    ref_camera: Camera,
+    area,
+    title: str = '',
+    scale: float = 0.5,
+    tile_px: int = 64,
+    grid_m: float = 1.0,
+) -> np.ndarray:
     """(h, w, 3) BGR picture at ``scale`` of the reference image size.
 
     Args:
@@ -49,8 +58,15 @@ def registration_overlay(current: np.ndarray, reference: np.ndarray, ref_H_img, 
     picture = (ref_small * 0.5).astype(np.uint8)
     if ref_H_img is not None:
         warped = cv2.warpPerspective(current, S @ np.asarray(ref_H_img, float), (w, h), flags=cv2.INTER_LINEAR)
-        covered = cv2.warpPerspective(np.full(current.shape[:2], 255, np.uint8), S @ np.asarray(ref_H_img, float),
-                                      (w, h), flags=cv2.INTER_NEAREST) > 0
+        covered = (
+            cv2.warpPerspective(
+                np.full(current.shape[:2], 255, np.uint8),
+                S @ np.asarray(ref_H_img, float),
+                (w, h),
+                flags=cv2.INTER_NEAREST,
+            )
+            > 0
+        )
         rows, cols = np.indices((h, w))
         odd = ((rows // tile_px + cols // tile_px) % 2).astype(bool)
         picture = np.where((covered & odd)[..., None], warped, ref_small)

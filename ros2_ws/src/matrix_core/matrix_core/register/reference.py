@@ -33,8 +33,16 @@ class KeyFrame:
 class Reference:
     """Reference image of one drone: calibration, cached ground features, ground polygon for the gate."""
 
-    def __init__(self, reference_id: str, camera: Camera, features: Features, area, ground_only: bool = True,
-                 margin_m: float = 0.0, boxes=()):
+    def __init__(
+        self,
+        reference_id: str,
+        camera: Camera,
+        features: Features,
+        area,
+        ground_only: bool = True,
+        margin_m: float = 0.0,
+        boxes=(),
+    ):
         self.reference_id = reference_id
         self.camera = camera
         self.area = area

@@ -40,8 +40,8 @@ class ReferencePairing:
     def __init__(self, max_pending: int = 5, max_camera_infos: int = 50):
         self.max_pending, self.max_camera_infos = max_pending, max_camera_infos
         self.started = False
-        self.camera_infos = {}   # stamp_ns -> CameraInfo
-        self.pending = {}        # stamp_ns -> image waiting for a CameraInfo
+        self.camera_infos = {}  # stamp_ns -> CameraInfo
+        self.pending = {}  # stamp_ns -> image waiting for a CameraInfo
 
     def camera_info(self, stamp_ns: int, info) -> list:
         """A CameraInfo arrived: the held image of its stamp (if any) may become the reference."""
@@ -65,8 +65,14 @@ class ReferencePairing:
         steps = [Step(HOLD, stamp_ns, image)]
         while len(self.pending) > self.max_pending:
             old = min(self.pending)
-            steps.append(Step(FAIL, old, self.pending.pop(old), reason=(
-                f'no reference: no CameraInfo with stamp {stamp_text(old)} arrived')))
+            steps.append(
+                Step(
+                    FAIL,
+                    old,
+                    self.pending.pop(old),
+                    reason=(f'no reference: no CameraInfo with stamp {stamp_text(old)} arrived'),
+                )
+            )
         return steps
 
     def started_with(self, stamp_ns: int) -> list:
@@ -77,6 +83,9 @@ class ReferencePairing:
         steps = []
         for stamp in sorted(self.pending):
             image = self.pending.pop(stamp)
-            steps.append(Step(REGISTER, stamp, image) if stamp >= stamp_ns else Step(
-                FAIL, stamp, image, reason='arrived before the reference image (no CameraInfo of its stamp)'))
+            steps.append(
+                Step(REGISTER, stamp, image)
+                if stamp >= stamp_ns
+                else Step(FAIL, stamp, image, reason='arrived before the reference image (no CameraInfo of its stamp)')
+            )
         return steps

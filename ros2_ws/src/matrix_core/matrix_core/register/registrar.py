@@ -51,25 +51,36 @@ class Registrar:
         backend: a feature backend to share between drones (default: built from ``settings``).
     """
 
-    def __init__(self, settings: RegisterSettings, reference_image: np.ndarray, reference_camera: Camera,
-                 area, reference_id: str = 'reference', backend=None):
+    def __init__(
+        self,
+        settings: RegisterSettings,
+        reference_image: np.ndarray,
+        reference_camera: Camera,
+        area,
+        reference_id: str = 'reference',
+        backend=None,
+    ):
         self.settings = s = settings
         self.backend = backend if backend is not None else make_backend(s)
         h, w = reference_image.shape[:2]
         if (w, h) != (reference_camera.width, reference_camera.height):
-            raise ValueError(f'{reference_id}: image is {w}x{h} but its calibration is '
-                             f'{reference_camera.width}x{reference_camera.height}')
+            raise ValueError(
+                f'{reference_id}: image is {w}x{h} but its calibration is '
+                f'{reference_camera.width}x{reference_camera.height}'
+            )
         features = self.backend.extract(reference_image, s.reference_max_features)
-        self.reference = Reference(reference_id, reference_camera, features, area, s.ground_only,
-                                   s.ground_margin_m, s.exclude_boxes)
+        self.reference = Reference(
+            reference_id, reference_camera, features, area, s.ground_only, s.ground_margin_m, s.exclude_boxes
+        )
         self.key = None
         self._previous_center = None
         self._frames_since_good = 1
         self._weak_streak = 0
         self._frames_on_key = 0  # frames registered since the last re-keying
         self._last_good = None  # (frame_id, features, ref_H_img)
-        self.tracker = FlowTracker(s.scale, s.track_corners, s.ransac_threshold_px, s.estimator, s.seed,
-                                   s.track_refine_scale)
+        self.tracker = FlowTracker(
+            s.scale, s.track_corners, s.ransac_threshold_px, s.estimator, s.seed, s.track_refine_scale
+        )
         self._track = None  # TrackState of the last registered frame (mode track), None: next one anchors
         # mode track, anchor_by_flow: the reference as a chain's anchor (its reduced images and ground corners)
         self._reference_track = None
@@ -77,12 +88,18 @@ class Registrar:
         # mode track: the reference's ground at the features' scale, where a doubted chain's anchor searches
         self._reference_ground = None
         if s.mode == 'track' and s.ground_only and s.anchor_search_margin_px > 0:
-            self._reference_ground = ground_mask(reference_camera, s.scale, area, s.ground_margin_m,
-                                                 s.exclude_boxes)
+            self._reference_ground = ground_mask(reference_camera, s.scale, area, s.ground_margin_m, s.exclude_boxes)
         if s.mode == 'track' and s.anchor_by_flow:
             self._reference_track = self.tracker.anchor(
-                self.tracker.reduce(reference_image), reference_camera, np.eye(3), reference_id,
-                len(self.reference.features), area, s.ground_margin_m, s.exclude_boxes)
+                self.tracker.reduce(reference_image),
+                reference_camera,
+                np.eye(3),
+                reference_id,
+                len(self.reference.features),
+                area,
+                s.ground_margin_m,
+                s.exclude_boxes,
+            )
 
     @property
     def reference_id(self) -> str:
@@ -102,8 +119,15 @@ class Registrar:
         h, w = image.shape[:2]
         if (w, h) != (cam.width, cam.height):
             self._track = None
-            return self._result(STATUS_FAILED, None, 0, 0, float('nan'), start,
-                                f'image is {w}x{h}, the reference is {cam.width}x{cam.height}')
+            return self._result(
+                STATUS_FAILED,
+                None,
+                0,
+                0,
+                float('nan'),
+                start,
+                f'image is {w}x{h}, the reference is {cam.width}x{cam.height}',
+            )
         if self.settings.mode != 'track':
             return self._register_full(image, frame_id, start)
         images = self.tracker.reduce(image)
@@ -118,16 +142,20 @@ class Registrar:
         why = f'{why}; by flow to the reference: {why_not}' if why_not else why
         result = self._register_full(image, frame_id, start, self._search_region(predicted))
         self._anchor(images, result, frame_id)
-        return replace(result, message='; '.join(filter(None, [f'anchor: {why}', result.message])),
-                       seconds=time.perf_counter() - start)
+        return replace(
+            result,
+            message='; '.join(filter(None, [f'anchor: {why}', result.message])),
+            seconds=time.perf_counter() - start,
+        )
 
     def _search_region(self, ref_H_cur) -> np.ndarray:
         """(h, w) bool where the current image can show the reference's ground by the prediction ``ref_H_cur``
         (None: no prediction, re-keyed or masking off: the whole image)."""
         if ref_H_cur is None or self._reference_ground is None or self.key is not None:
             return None
-        return predicted_region(self._reference_ground, ref_H_cur, self.settings.scale,
-                                self.settings.anchor_search_margin_px)
+        return predicted_region(
+            self._reference_ground, ref_H_cur, self.settings.scale, self.settings.anchor_search_margin_px
+        )
 
     def _register_full(self, image: np.ndarray, frame_id, start, region: np.ndarray = None) -> Registration:
         """Features of ``image`` (full-size BGR or grey) matched to the reference or key frame; only within
@@ -142,7 +170,7 @@ class Registrar:
             result = self._attempt(cur, *self._target(), start)
             if region is not None and result.ok:
                 notes.append('features within the predicted ground')
-            elif region is not None:   # the prediction may have been wrong: the whole image
+            elif region is not None:  # the prediction may have been wrong: the whole image
                 notes.append(f'not registered within the predicted ground ({result.message}), the whole image')
                 cur = self.backend.extract(image, s.max_features)
                 result = self._attempt(cur, *self._target(), start)
@@ -170,9 +198,8 @@ class Registrar:
             return None, f'due (every {s.reanchor_every} frames)', None
         step = self.tracker.step(state, images)
         anchor = state.anchor
-        if step.anchor_H_cur is None:   # the flow step alone, chained to the previous frame, still predicts
-            predicted = None if step.prev_H_cur is None else \
-                anchor.ref_H_img @ state.anchor_H_img @ step.prev_H_cur
+        if step.anchor_H_cur is None:  # the flow step alone, chained to the previous frame, still predicts
+            predicted = None if step.prev_H_cur is None else anchor.ref_H_img @ state.anchor_H_img @ step.prev_H_cur
             return None, f'chain doubted: {step.reason}', predicted
         H = anchor.ref_H_img @ step.anchor_H_cur
         H = H / H[2, 2]
@@ -180,16 +207,40 @@ class Registrar:
             return None, f'chain doubted: {step.inliers} flow inliers (track_min_inliers {s.track_min_inliers})', H
         cam = self.reference.camera
         reason, implied = check_registration(
-            H, cam.K, cam.img_H_ground(), cam.center, self.reference.polygon, self._previous_center,
-            self._frames_since_good, s.gate_max_shape_error, s.gate_max_area_ratio, s.gate_max_height_change_m,
-            s.gate_max_step_m, anchor.inliers, s.gate_shape_inliers)
+            H,
+            cam.K,
+            cam.img_H_ground(),
+            cam.center,
+            self.reference.polygon,
+            self._previous_center,
+            self._frames_since_good,
+            s.gate_max_shape_error,
+            s.gate_max_area_ratio,
+            s.gate_max_height_change_m,
+            s.gate_max_step_m,
+            anchor.inliers,
+            s.gate_shape_inliers,
+        )
         if reason:
             return None, f'chain doubted: {reason}', None
         self._previous_center, self._frames_since_good = implied.center, 1
         steps = state.steps + 1
         self._track = TrackState(anchor, images, step.corners, step.anchor_H_cur, steps, step.prev_H_cur)
-        return self._result(STATUS_OK, H, step.tracked, step.inliers, step.error_px, start,
-                            f'tracked: {steps} frame(s) after its anchor', anchor.chain, implied), '', None
+        return (
+            self._result(
+                STATUS_OK,
+                H,
+                step.tracked,
+                step.inliers,
+                step.error_px,
+                start,
+                f'tracked: {steps} frame(s) after its anchor',
+                anchor.chain,
+                implied,
+            ),
+            '',
+            None,
+        )
 
     def _anchor_by_flow(self, images: TrackImages, frame_id, start, due: bool) -> tuple:
         """(Registration, '') of the frame of ``images`` refined against the reference's own ground corners, which
@@ -201,8 +252,7 @@ class Registrar:
         anchor is ``due`` on a sound chain (a reference filmed at another time may never hold, as on the real
         sample; each failed try costs a flow step)."""
         s, state, reference = self.settings, self._track, self._reference_track
-        if reference is None or self.key is not None or (self._flow_anchor_failures >= FLOW_ANCHOR_TRIES
-                                                          and not due):
+        if reference is None or self.key is not None or (self._flow_anchor_failures >= FLOW_ANCHOR_TRIES and not due):
             return None, ''
         result, why_not = self._flow_to_reference(images, frame_id, start, state, reference)
         self._flow_anchor_failures = 0 if result is not None else self._flow_anchor_failures + 1
@@ -212,8 +262,7 @@ class Registrar:
         """:meth:`_anchor_by_flow` from ``state`` (or the reference's own TrackState when None)."""
         s = self.settings
         if state is not None:  # the previous frame, seen from the reference: the flow predicts ref_H_cur
-            state = replace(state, anchor=reference.anchor,
-                            anchor_H_img=state.anchor.ref_H_img @ state.anchor_H_img)
+            state = replace(state, anchor=reference.anchor, anchor_H_img=state.anchor.ref_H_img @ state.anchor_H_img)
         step = self.tracker.step(state or reference, images)
         if step.anchor_H_cur is None:
             return None, step.reason
@@ -222,9 +271,20 @@ class Registrar:
         H = step.anchor_H_cur / step.anchor_H_cur[2, 2]
         cam = self.reference.camera
         reason, implied = check_registration(
-            H, cam.K, cam.img_H_ground(), cam.center, self.reference.polygon, self._previous_center,
-            self._frames_since_good, s.gate_max_shape_error, s.gate_max_area_ratio, s.gate_max_height_change_m,
-            s.gate_max_step_m, step.inliers, s.gate_shape_inliers)
+            H,
+            cam.K,
+            cam.img_H_ground(),
+            cam.center,
+            self.reference.polygon,
+            self._previous_center,
+            self._frames_since_good,
+            s.gate_max_shape_error,
+            s.gate_max_area_ratio,
+            s.gate_max_height_change_m,
+            s.gate_max_step_m,
+            step.inliers,
+            s.gate_shape_inliers,
+        )
         if reason:
             return None, reason
         self._previous_center, self._frames_since_good = implied.center, 1
@@ -237,10 +297,16 @@ class Registrar:
         self._track = None
         if result.ok:
             s = self.settings
-            self._track = self.tracker.anchor(images, registered_camera(self.reference.camera, result.implied),
-                                              result.ref_H_img, f'{result.reference_id}<-track:{frame_id}',
-                                              result.inliers, self.reference.area, s.ground_margin_m,
-                                              s.exclude_boxes)
+            self._track = self.tracker.anchor(
+                images,
+                registered_camera(self.reference.camera, result.implied),
+                result.ref_H_img,
+                f'{result.reference_id}<-track:{frame_id}',
+                result.inliers,
+                self.reference.area,
+                s.ground_margin_m,
+                s.exclude_boxes,
+            )
 
     def reference_result(self) -> Registration:
         """The result of the reference image itself (identity, exact by definition), for a caller that made
@@ -271,42 +337,71 @@ class Registrar:
         notes.append(f'reference retried, stays on {key_id} ({why})')
         return None
 
-    def _attempt(self, cur: Features, target: Features, target_to_ref: np.ndarray, start,
-                 reference_id: str = None) -> Registration:
+    def _attempt(
+        self, cur: Features, target: Features, target_to_ref: np.ndarray, start, reference_id: str = None
+    ) -> Registration:
         """Match ``cur`` to ``target`` (whose pixels map to the reference's by ``target_to_ref``), fit, gate."""
         s = self.settings
         cam = self.reference.camera
         cv2.setRNGSeed(s.seed)  # OpenCV's global RNG, seeded per registration (as before the seeded RANSAC)
         pairs = match_symmetric(cur.desc, target.desc, s.ratio, s.matcher)
         # Fit in reference pixels, so that the inlier threshold is in full-resolution reference pixels.
-        dst = cv2.perspectiveTransform(target.xy[pairs[:, 1]].reshape(-1, 1, 2), target_to_ref).reshape(-1, 2) \
-            if len(pairs) else np.zeros((0, 2))
-        fit = fit_homography(cur.xy[pairs[:, 0]], dst, s.estimator, s.ransac_threshold_px, s.ransac_iterations,
-                             seed=s.seed)
+        dst = (
+            cv2.perspectiveTransform(target.xy[pairs[:, 1]].reshape(-1, 1, 2), target_to_ref).reshape(-1, 2)
+            if len(pairs)
+            else np.zeros((0, 2))
+        )
+        fit = fit_homography(
+            cur.xy[pairs[:, 0]], dst, s.estimator, s.ransac_threshold_px, s.ransac_iterations, seed=s.seed
+        )
         matches, inliers = len(pairs), int(fit.inliers.sum())
         args = (matches, inliers, fit.error_px, start)
         if fit.H is None:
             return self._result(STATUS_FAILED, None, matches, 0, float('nan'), start, fit.reason, reference_id)
         if inliers < s.min_inliers:
-            return self._result(STATUS_FAILED, None, *args, f'only {inliers} inliers (min_inliers {s.min_inliers})',
-                                reference_id)
+            return self._result(
+                STATUS_FAILED, None, *args, f'only {inliers} inliers (min_inliers {s.min_inliers})', reference_id
+            )
         reason, implied = check_registration(
-            fit.H, cam.K, cam.img_H_ground(), cam.center, self.reference.polygon, self._previous_center,
-            self._frames_since_good, s.gate_max_shape_error, s.gate_max_area_ratio,
-            s.gate_max_height_change_m, s.gate_max_step_m, inliers, s.gate_shape_inliers)
+            fit.H,
+            cam.K,
+            cam.img_H_ground(),
+            cam.center,
+            self.reference.polygon,
+            self._previous_center,
+            self._frames_since_good,
+            s.gate_max_shape_error,
+            s.gate_max_area_ratio,
+            s.gate_max_height_change_m,
+            s.gate_max_step_m,
+            inliers,
+            s.gate_shape_inliers,
+        )
         if reason:
             return self._result(STATUS_FAILED, None, *args, reason, reference_id)
         return self._result(STATUS_OK, fit.H, *args, '', reference_id, implied)
 
-    def _result(self, status, H, matches, inliers, error_px, start, message='', reference_id=None,
-                implied=None) -> Registration:
+    def _result(
+        self, status, H, matches, inliers, error_px, start, message='', reference_id=None, implied=None
+    ) -> Registration:
         ground_H_img = None
         if H is not None:
             ground_H_img = self.reference.camera.ground_H_img() @ H
             ground_H_img = ground_H_img / ground_H_img[2, 2]
-        return Registration(status, H, ground_H_img, inliers / matches if matches else 0.0, matches, inliers,
-                            error_px, reference_id or self.reference_id, self.backend.name,
-                            time.perf_counter() - start, message, implied)
+        return Registration(
+            status,
+            H,
+            ground_H_img,
+            inliers / matches if matches else 0.0,
+            matches,
+            inliers,
+            error_px,
+            reference_id or self.reference_id,
+            self.backend.name,
+            time.perf_counter() - start,
+            message,
+            implied,
+        )
 
     def _update_key(self, result: Registration, frame_id, cur: Features) -> str:
         """Track good frames; after ``rekey_after`` weak frames in a row, chain through the last good one."""

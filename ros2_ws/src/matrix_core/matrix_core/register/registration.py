@@ -24,8 +24,8 @@ import numpy as np
 from matrix_core.geometry.homography import ImpliedCamera, implied_camera
 
 STATUS_OK = 'ok'
-STATUS_FAILED = 'failed'          # register could not register the frame (message: why)
-STATUS_UNUSABLE = 'unusable'      # it said ok, but what arrived breaks the validity rule (message: why)
+STATUS_FAILED = 'failed'  # register could not register the frame (message: why)
+STATUS_UNUSABLE = 'unusable'  # it said ok, but what arrived breaks the validity rule (message: why)
 # Below this reciprocal condition number a homography is numerically singular (its inverse would invent geometry).
 MIN_RCOND = 1e-12
 
@@ -127,10 +127,18 @@ class Registration:
 
     def to_dict(self) -> dict:
         """JSON-ready dict of the scalar fields (the matrices' file form: ``register.file_frame``)."""
+
         def num(v):
             return None if v is None or not np.isfinite(v) else float(v)
 
-        return {'status': self.status, 'confidence': float(self.confidence),
-                'matches': int(self.matches), 'inliers': int(self.inliers),
-                'inlier_error_px': num(self.inlier_error_px), 'reference_id': self.reference_id,
-                'backend': self.backend, 'seconds': float(self.seconds), 'message': self.message}
+        return {
+            'status': self.status,
+            'confidence': float(self.confidence),
+            'matches': int(self.matches),
+            'inliers': int(self.inliers),
+            'inlier_error_px': num(self.inlier_error_px),
+            'reference_id': self.reference_id,
+            'backend': self.backend,
+            'seconds': float(self.seconds),
+            'message': self.message,
+        }

@@ -43,6 +43,8 @@ def settings_for_dataset(settings: RegisterSettings, dataset) -> tuple:
     if scene is None:
         return settings, ''
     boxes, margin = scene
-    note = (f'scene from {getattr(dataset, "root", "the dataset")}: {len(boxes) // 5} obstacle box(es), '
-            f'flat ground {margin:.1f} m beyond the area')
+    note = (
+        f'scene from {getattr(dataset, "root", "the dataset")}: {len(boxes) // 5} obstacle box(es), '
+        f'flat ground {margin:.1f} m beyond the area'
+    )
     return replace(settings, exclude_boxes=boxes, ground_margin_m=margin), note

@@ -24,8 +24,13 @@ def predicted_region(reference_mask: np.ndarray, ref_H_cur: np.ndarray, scale: f
     ref_small_H_cur_small = np.linalg.inv(full_H_small) @ ref_H_cur @ full_H_small
     h, w = reference_mask.shape
     # WARP_INVERSE_MAP: each current pixel looks up where the prediction puts it in the reference mask
-    warped = cv2.warpPerspective(reference_mask.astype(np.uint8), ref_small_H_cur_small, (w, h),
-                                 flags=cv2.INTER_NEAREST | cv2.WARP_INVERSE_MAP, borderValue=0)
+    warped = cv2.warpPerspective(
+        reference_mask.astype(np.uint8),
+        ref_small_H_cur_small,
+        (w, h),
+        flags=cv2.INTER_NEAREST | cv2.WARP_INVERSE_MAP,
+        borderValue=0,
+    )
     grow = int(np.ceil(margin_px * scale))
     if grow > 0:
         warped = cv2.dilate(warped, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * grow + 1, 2 * grow + 1)))

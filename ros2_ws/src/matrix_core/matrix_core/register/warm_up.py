@@ -9,7 +9,7 @@ import cv2
 
 from matrix_core.register.registrar import Registrar
 
-_warmed = []   # the process has warmed up once (a module-level flag: the first calls are per process)
+_warmed = []  # the process has warmed up once (a module-level flag: the first calls are per process)
 
 
 def warm_up_once(settings, reference_image, reference_camera, area, backend=None) -> list:
@@ -22,6 +22,12 @@ def warm_up_once(settings, reference_image, reference_camera, area, backend=None
         return []
     _warmed.append(True)
     grey = cv2.cvtColor(reference_image, cv2.COLOR_BGR2GRAY) if reference_image.ndim == 3 else reference_image
-    registrar = Registrar(replace(settings, mode='track', anchor_by_flow=False), reference_image, reference_camera,
-                          area, 'warm-up', backend)
+    registrar = Registrar(
+        replace(settings, mode='track', anchor_by_flow=False),
+        reference_image,
+        reference_camera,
+        area,
+        'warm-up',
+        backend,
+    )
     return [registrar.register(grey, frame) for frame in range(2)]

@@ -35,16 +35,19 @@ def require_checkpoint(name: str, what: str, source: str = '') -> Path:
         raise MissingWeightsError(
             f'{what} needs the weight file {name}, which is missing: put it at {path} '
             f'(the torch hub checkpoints folder, torch.hub.get_dir()/checkpoints/; `make setup` links the '
-            f'offline copies from shared/weights there).{hint}')
+            f'offline copies from shared/weights there).{hint}'
+        )
     return path
 
 
 def require_hardnet() -> Path:
     """HardNet's weights (not available offline here; see shared/weights/README.md)."""
     return require_checkpoint(
-        HARDNET_FILE, 'The gftt_affnet_hardnet backend (kornia HardNet descriptor)',
+        HARDNET_FILE,
+        'The gftt_affnet_hardnet backend (kornia HardNet descriptor)',
         ' or '.join(HARDNET_URLS) + '; until then use gftt_affnet_hardtfeat or gftt_affnet_sift, which are '
-        'substitutes, not HardNet')
+        'substitutes, not HardNet',
+    )
 
 
 def load_hardtfeat():
@@ -56,12 +59,19 @@ def load_hardtfeat():
     import torch
     import kornia.feature as KF
 
-    path = require_checkpoint(HARDTFEAT_FILE, 'The gftt_affnet_hardtfeat backend',
-                              'shared/weights/extra/HardTFeat.pth (ducha-aiki/affnet)')
+    path = require_checkpoint(
+        HARDTFEAT_FILE, 'The gftt_affnet_hardtfeat backend', 'shared/weights/extra/HardTFeat.pth (ducha-aiki/affnet)'
+    )
     sd = torch.load(path, map_location='cpu', weights_only=True)['state_dict']
     model = KF.TFeat(pretrained=False)
-    model.load_state_dict({
-        'features.1.weight': sd['features.0.weight'], 'features.1.bias': sd['features.0.bias'],
-        'features.4.weight': sd['features.3.weight'], 'features.4.bias': sd['features.3.bias'],
-        'descr.0.weight': sd['classifier.1.weight'].reshape(128, -1), 'descr.0.bias': sd['classifier.1.bias']})
+    model.load_state_dict(
+        {
+            'features.1.weight': sd['features.0.weight'],
+            'features.1.bias': sd['features.0.bias'],
+            'features.4.weight': sd['features.3.weight'],
+            'features.4.bias': sd['features.3.bias'],
+            'descr.0.weight': sd['classifier.1.weight'].reshape(128, -1),
+            'descr.0.bias': sd['classifier.1.bias'],
+        }
+    )
     return model.eval()

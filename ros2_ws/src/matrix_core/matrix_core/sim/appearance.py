@@ -10,15 +10,32 @@ import numpy as np
 
 SHADED, LIT = 0.7, 1.05  # brightness of the side away from / facing the light (times the colour)
 
-_SUITS = np.array([[28, 28, 30], [45, 45, 48], [62, 62, 64], [75, 73, 70], [95, 95, 98], [58, 48, 40],
-                   [80, 55, 38], [40, 50, 65], [52, 58, 70], [72, 66, 60], [105, 102, 100]],
-                  dtype=float)  # BGR: black, greys, charcoal, dark blue, brown
-_LIGHT_SHIRTS = np.array([[170, 170, 172], [200, 200, 205], [150, 160, 170], [120, 130, 150],
-                          [110, 110, 112], [140, 120, 100]], dtype=float)
-_DRESSES = np.array([[30, 30, 35], [40, 30, 80], [70, 40, 40], [90, 90, 95], [50, 60, 110],
-                     [100, 80, 120]], dtype=float)
-_SKIN = np.array([[140, 170, 215], [120, 150, 200], [95, 120, 165], [70, 90, 125], [50, 65, 90],
-                  [125, 135, 150], [100, 108, 118]], dtype=float)  # the last two: greyish (dusk)
+_SUITS = np.array(
+    [
+        [28, 28, 30],
+        [45, 45, 48],
+        [62, 62, 64],
+        [75, 73, 70],
+        [95, 95, 98],
+        [58, 48, 40],
+        [80, 55, 38],
+        [40, 50, 65],
+        [52, 58, 70],
+        [72, 66, 60],
+        [105, 102, 100],
+    ],
+    dtype=float,
+)  # BGR: black, greys, charcoal, dark blue, brown
+_LIGHT_SHIRTS = np.array(
+    [[170, 170, 172], [200, 200, 205], [150, 160, 170], [120, 130, 150], [110, 110, 112], [140, 120, 100]], dtype=float
+)
+_DRESSES = np.array(
+    [[30, 30, 35], [40, 30, 80], [70, 40, 40], [90, 90, 95], [50, 60, 110], [100, 80, 120]], dtype=float
+)
+_SKIN = np.array(
+    [[140, 170, 215], [120, 150, 200], [95, 120, 165], [70, 90, 125], [50, 65, 90], [125, 135, 150], [100, 108, 118]],
+    dtype=float,
+)  # the last two: greyish (dusk)
 _HAIR = np.array([[15, 15, 18], [25, 30, 40], [30, 45, 70], [60, 80, 110], [110, 110, 115]], dtype=float)
 DRESS_FRACTION = 0.2
 LIGHT_SHIRT_FRACTION = 0.15

@@ -43,11 +43,17 @@ def sample_drone_effects(cfg, rng) -> DroneEffects:
     exposure = u(cfg.exposure)
     blue = u(cfg.white_balance)  # white-balance errors run along the blue-amber axis (no green casts)
     white_balance = np.array([blue, 1.0, 2.0 - blue])
-    return DroneEffects(exposure=exposure, white_balance=white_balance,
-                        gamma=u(cfg.gamma), contrast=u(cfg.contrast), blur_sigma=u(cfg.blur_sigma),
-                        noise_sigma=u(cfg.noise_sigma), shot_noise=u(cfg.shot_noise),
-                        vignetting=u(cfg.vignetting),
-                        jpeg_quality=int(rng.integers(cfg.jpeg_quality[0], cfg.jpeg_quality[1] + 1)))
+    return DroneEffects(
+        exposure=exposure,
+        white_balance=white_balance,
+        gamma=u(cfg.gamma),
+        contrast=u(cfg.contrast),
+        blur_sigma=u(cfg.blur_sigma),
+        noise_sigma=u(cfg.noise_sigma),
+        shot_noise=u(cfg.shot_noise),
+        vignetting=u(cfg.vignetting),
+        jpeg_quality=int(rng.integers(cfg.jpeg_quality[0], cfg.jpeg_quality[1] + 1)),
+    )
 
 
 def supersampled_camera(camera, factor: float) -> Camera:
@@ -121,15 +127,19 @@ class CameraEffects:
             img = cv2.GaussianBlur(img, (0, 0), sigma)
         if e.vignetting > 0:
             img = cv2.multiply(img, self._vignette_map(e.vignetting, W, H), scale=1.0 / 255.0)
-        gains = (e.exposure * (1.0 + self.jitter * rng.standard_normal())
-                 * e.white_balance * (1.0 + self.jitter * rng.standard_normal(3)))
+        gains = (
+            e.exposure
+            * (1.0 + self.jitter * rng.standard_normal())
+            * e.white_balance
+            * (1.0 + self.jitter * rng.standard_normal(3))
+        )
         img = cv2.LUT(img, tone_lut(gains, e.gamma, e.contrast))
         # read + shot noise (standard deviation from the signal); unit normals from a per-size bank at a
         # random offset: drawing H*W*3 fresh normals per view would cost as much as rendering it
         bank = self._normal_bank(img.size)
         start = int(rng.integers(0, bank.size - img.size + 1))
         std = cv2.LUT(img, noise_std_lut(e, W))
-        noise = cv2.multiply(std, bank[start:start + img.size].reshape(img.shape))
+        noise = cv2.multiply(std, bank[start : start + img.size].reshape(img.shape))
         img = cv2.add(img, noise, dtype=cv2.CV_8U)
         return jpeg_round_trip(img, effective_jpeg_quality(e.jpeg_quality, W))
 
@@ -155,7 +165,7 @@ def noise_std_lut(e: DroneEffects, width: int) -> np.ndarray:
     """(256,) float32 noise standard deviation per grey level at an output ``width``: the sensor noise is
     given at 1920 px and averaging the full-resolution pixels down to ``width`` divides it by 1920 / width."""
     scale = min(1.0, width / FULL_WIDTH)
-    return (scale * np.sqrt(e.noise_sigma ** 2 + e.shot_noise * np.arange(256))).astype(np.float32)
+    return (scale * np.sqrt(e.noise_sigma**2 + e.shot_noise * np.arange(256))).astype(np.float32)
 
 
 def effective_jpeg_quality(quality: int, width: int) -> int:
@@ -168,5 +178,5 @@ def tone_lut(gains, gamma: float, contrast: float) -> np.ndarray:
     """(256, 1, 3) uint8 per-channel look-up table: BGR ``gains`` (exposure x white balance), then gamma,
     then contrast about mid-grey."""
     x = np.clip(np.arange(256)[:, None] / 255.0 * np.asarray(gains)[None, :], 0.0, 1.0)
-    y = 0.5 + (x ** gamma - 0.5) * contrast
+    y = 0.5 + (x**gamma - 0.5) * contrast
     return np.clip(np.round(y * 255.0), 0, 255).astype(np.uint8).reshape(256, 1, 3)

@@ -82,8 +82,7 @@ class CrowdConfig:
     keep_out_margin: float = 0.5  # metres kept free around the block and inside the area border
 
     def __post_init__(self):
-        if (self.count < 0 or self.speed <= 0 or len(self.height_range) != 2
-                or not 0.0 <= self.dress_fraction <= 1.0):
+        if self.count < 0 or self.speed <= 0 or len(self.height_range) != 2 or not 0.0 <= self.dress_fraction <= 1.0:
             raise ValueError(f'invalid crowd config {self}')
 
 
@@ -133,13 +132,18 @@ class LightingConfig:
     tint_std: float = 0.025  # per-channel light colour spread
 
     def __post_init__(self):
-        for name in ('azimuth_deg', 'elevation_deg', 'sun_intensity', 'ambient', 'shadow_factor', 'dusk',
-                     'level'):
+        for name in ('azimuth_deg', 'elevation_deg', 'sun_intensity', 'ambient', 'shadow_factor', 'dusk', 'level'):
             lo_hi = getattr(self, name)
             if len(lo_hi) != 2 or lo_hi[0] > lo_hi[1]:
                 raise ValueError(f'lighting.{name} must be [low, high], got {lo_hi}')
-        if not (0 < self.elevation_deg[0] and self.elevation_deg[1] <= 90 and 0 <= self.dusk[0]
-                and self.dusk[1] <= 1 and 0 < self.shadow_factor[0] and self.shadow_factor[1] <= 1):
+        if not (
+            0 < self.elevation_deg[0]
+            and self.elevation_deg[1] <= 90
+            and 0 <= self.dusk[0]
+            and self.dusk[1] <= 1
+            and 0 < self.shadow_factor[0]
+            and self.shadow_factor[1] <= 1
+        ):
             raise ValueError(f'invalid lighting config {self}')
 
 
@@ -162,8 +166,17 @@ class CameraEffectsConfig:
     jitter: float = 0.02  # relative per-frame jitter of exposure and white balance
 
     def __post_init__(self):
-        for name in ('exposure', 'white_balance', 'gamma', 'contrast', 'blur_sigma', 'noise_sigma',
-                     'shot_noise', 'vignetting', 'jpeg_quality'):
+        for name in (
+            'exposure',
+            'white_balance',
+            'gamma',
+            'contrast',
+            'blur_sigma',
+            'noise_sigma',
+            'shot_noise',
+            'vignetting',
+            'jpeg_quality',
+        ):
             lo_hi = getattr(self, name)
             if len(lo_hi) != 2 or lo_hi[0] > lo_hi[1] or lo_hi[0] < 0:
                 raise ValueError(f'camera_effects.{name} must be [low, high] >= 0, got {lo_hi}')
@@ -216,8 +229,7 @@ class SceneConfig:
         x0, y0, x1, y1 = self.area
         gx0, gy0, gx1, gy1 = MATRIX_AREA  # the positionID grid
         if not (gx0 <= x0 < x1 <= gx1 and gy0 <= y0 < y1 <= gy1):
-            raise ValueError(f'area {self.area} must lie inside the MATRIX position grid '
-                             f'{MATRIX_AREA}')
+            raise ValueError(f'area {self.area} must lie inside the MATRIX position grid {MATRIX_AREA}')
         if self.building_distance <= self.drones.ring_half_side + 2.0:
             raise ValueError('building_distance must be beyond the drone ring (+2 m)')
 

@@ -90,8 +90,9 @@ class Crowd:
         return np.arange(len(self.positions))
 
     def _free(self, p) -> bool:
-        return _inside(np.asarray(p), self.walk_area) and not any(_inside(np.asarray(p), _inflated(o, 0.2))
-                                                                   for o in self.obstacles)
+        return _inside(np.asarray(p), self.walk_area) and not any(
+            _inside(np.asarray(p), _inflated(o, 0.2)) for o in self.obstacles
+        )
 
     def _random_point(self) -> np.ndarray:
         x0, y0, x1, y1 = self.walk_area
@@ -135,8 +136,7 @@ class Crowd:
             return self.via[i]
         x0, y0, x1, y1 = _inflated(blocking[0], self.detour[i])
         corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
-        reachable = [c for c in corners
-                     if not segment_hits_box(p, c, blocking[0]) and np.linalg.norm(c - p) > 0.7]
+        reachable = [c for c in corners if not segment_hits_box(p, c, blocking[0]) and np.linalg.norm(c - p) > 0.7]
         if not reachable:
             return goal
         costs = [np.linalg.norm(c - p) + np.linalg.norm(goal - c) for c in reachable]

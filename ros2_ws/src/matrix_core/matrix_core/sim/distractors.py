@@ -25,8 +25,15 @@ import numpy as np
 from matrix_core.sim.config import BoxConfig
 
 # Saturated sphere colours (BGR) like the real corner markers: orange, blue, magenta, green, yellow, red, cyan.
-SPHERE_COLORS = [(0, 120, 245), (200, 80, 20), (190, 40, 200), (40, 170, 40), (0, 210, 235), (30, 30, 210),
-                 (210, 200, 30)]
+SPHERE_COLORS = [
+    (0, 120, 245),
+    (200, 80, 20),
+    (190, 40, 200),
+    (40, 170, 40),
+    (0, 210, 235),
+    (30, 30, 210),
+    (210, 200, 30),
+]
 POST_COLORS = [(30, 30, 90), (40, 40, 45), (90, 90, 95), (160, 160, 165), (30, 60, 40)]
 CAR_COLORS = [(40, 40, 45), (200, 200, 205), (60, 40, 150), (120, 70, 30), (130, 130, 135), (30, 30, 30)]
 THIN_KINDS = ('pole', 'bollard', 'post_sphere', 'bin')  # allowed inside the area
@@ -77,8 +84,12 @@ def _round(kind: str, xy, rng: np.random.Generator, sphere_color=None) -> Round:
     if kind == 'tree':
         trunk_h, crown = rng.uniform(2.0, 3.5), rng.uniform(1.2, 2.2)
         green = tuple(float(v) for v in (rng.uniform(30, 60), rng.uniform(80, 120), rng.uniform(40, 70)))
-        return Round(kind, xy, [(rng.uniform(0.12, 0.22), 0.0, trunk_h + crown * 0.5, (40, 55, 70))],
-                     [(trunk_h + crown, crown, green)])
+        return Round(
+            kind,
+            xy,
+            [(rng.uniform(0.12, 0.22), 0.0, trunk_h + crown * 0.5, (40, 55, 70))],
+            [(trunk_h + crown, crown, green)],
+        )
     raise ValueError(f'unknown distractor kind {kind!r}')
 
 
@@ -92,8 +103,9 @@ def _box(kind: str, xy, rng: np.random.Generator) -> BoxConfig:
         color = [float(v) for v in CAR_COLORS[rng.integers(len(CAR_COLORS))]]
     if rng.random() < 0.5:
         size = size[::-1]
-    return BoxConfig(center=[float(xy[0]), float(xy[1])], size=[float(s) for s in size], height=float(height),
-                     color=color)
+    return BoxConfig(
+        center=[float(xy[0]), float(xy[1])], size=[float(s) for s in size], height=float(height), color=color
+    )
 
 
 def _footprint(item) -> tuple:
@@ -131,12 +143,17 @@ class Distractors:
         self._taken = [b.bounds for b in config.obstacles] + [b.bounds for b in config.boards]
         if cfg.corner_posts:  # one post with a sphere just outside each area corner, distinct colours
             colors = rng.permutation(len(SPHERE_COLORS))
-            for k, (x, y, sx, sy) in enumerate([(ax0, ay0, -1, -1), (ax1, ay0, 1, -1), (ax1, ay1, 1, 1),
-                                                (ax0, ay1, -1, 1)]):
+            for k, (x, y, sx, sy) in enumerate(
+                [(ax0, ay0, -1, -1), (ax1, ay0, 1, -1), (ax1, ay1, 1, 1), (ax0, ay1, -1, 1)]
+            ):
                 for _ in range(20):  # just outside the corner, off the diagonal when a pillar stands there
                     off = rng.uniform(0.5, 2.0, 2)
-                    item = _round('post_sphere', np.array([x + sx * off[0], y + sy * off[1]]), rng,
-                                  SPHERE_COLORS[colors[k % len(colors)]])
+                    item = _round(
+                        'post_sphere',
+                        np.array([x + sx * off[0], y + sy * off[1]]),
+                        rng,
+                        SPHERE_COLORS[colors[k % len(colors)]],
+                    )
                     if self._add(item, margin=0.2):
                         break
         half_area = max(ax1 - cx, ay1 - cy)
@@ -191,16 +208,21 @@ class Distractors:
         out = []
         for item in self.inside:
             x0, y0, x1, y1 = _footprint(item)
-            out.append(BoxConfig(center=[(x0 + x1) / 2, (y0 + y1) / 2],
-                                 size=[x1 - x0 + 2 * margin, y1 - y0 + 2 * margin], height=1.0))
+            out.append(
+                BoxConfig(
+                    center=[(x0 + x1) / 2, (y0 + y1) / 2], size=[x1 - x0 + 2 * margin, y1 - y0 + 2 * margin], height=1.0
+                )
+            )
         return out
 
 
 def shadow_hulls(rounds, offset) -> list:
     """Per Round: (M, 2) ground points whose convex hull is its sun shadow (footprint circle and every
     part's top circle displaced by ``offset`` (2,) metres per metre of height)."""
-    ring = np.stack([np.cos(np.linspace(0, 2 * np.pi, 8, endpoint=False)),
-                     np.sin(np.linspace(0, 2 * np.pi, 8, endpoint=False))], axis=1)
+    ring = np.stack(
+        [np.cos(np.linspace(0, 2 * np.pi, 8, endpoint=False)), np.sin(np.linspace(0, 2 * np.pi, 8, endpoint=False))],
+        axis=1,
+    )
     hulls = []
     for r in rounds:
         pts = [r.xy + ring * r.cylinders[0][0]] if r.cylinders else []

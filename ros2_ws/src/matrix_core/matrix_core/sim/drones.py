@@ -26,8 +26,7 @@ CONTROL_DT = 0.05  # seconds per control tick
 AIM_RELAX_S = 3.0  # time constant of the wandering aimed point
 REFERENCE_WIDTH = 1920  # pixel errors are measured at this width (the paper's capture size)
 # Home directions of D1..D8 in the internal frame, from the real reference poses (file y is negated).
-HOME_DIRECTIONS = np.array([[-1, 1], [0, 1], [1, 1], [1, 0], [1, -1], [0, -1], [-1, -1], [-1, 0]],
-                           dtype=float)
+HOME_DIRECTIONS = np.array([[-1, 1], [0, 1], [1, 1], [1, 0], [1, -1], [0, -1], [-1, -1], [-1, 0]], dtype=float)
 
 
 def intrinsics(width: int, height: int, hfov_deg: float) -> np.ndarray:
@@ -90,19 +89,34 @@ class DroneFleet:
         self.K_ref = intrinsics(REFERENCE_WIDTH, REFERENCE_WIDTH * 9 // 16, config.hfov_deg)
         self.drones = []
         for k in range(config.count):
-            home = np.array([*(self.center[:2] + config.ring_half_side * HOME_DIRECTIONS[k]),
-                             config.altitude])
+            home = np.array([*(self.center[:2] + config.ring_half_side * HOME_DIRECTIONS[k]), config.altitude])
             start = self._random_target(home)
             yaw, pitch = look_at_angles(start, self.center)
-            self.drones.append(DroneState(home, start, np.zeros(3), self._random_target(home),
-                                          np.zeros(3), self._random_aim(), self._retarget_time(), yaw, pitch,
-                                          err_sum=np.zeros(2), err_prev=np.zeros(2)))
+            self.drones.append(
+                DroneState(
+                    home,
+                    start,
+                    np.zeros(3),
+                    self._random_target(home),
+                    np.zeros(3),
+                    self._random_aim(),
+                    self._retarget_time(),
+                    yaw,
+                    pitch,
+                    err_sum=np.zeros(2),
+                    err_prev=np.zeros(2),
+                )
+            )
 
     def _random_target(self, home: np.ndarray) -> np.ndarray:
         c = self.config
-        return home + np.array([self.rng.uniform(-c.target_xy, c.target_xy),
-                                self.rng.uniform(-c.target_xy, c.target_xy),
-                                self.rng.uniform(-c.target_z_band / 2, c.target_z_band / 2)])
+        return home + np.array(
+            [
+                self.rng.uniform(-c.target_xy, c.target_xy),
+                self.rng.uniform(-c.target_xy, c.target_xy),
+                self.rng.uniform(-c.target_z_band / 2, c.target_z_band / 2),
+            ]
+        )
 
     def _retarget_time(self) -> float:
         lo, hi = self.config.retarget_period
@@ -116,8 +130,7 @@ class DroneFleet:
         """Static reference pose of drone ``index`` (``reference_ring_half_side``, ``reference_altitude``),
         aimed exactly at the scene centre: the view of the ``reference/`` folder, as in the real sample."""
         c = self.config
-        pos = np.array([*(self.center[:2] + c.reference_ring_half_side * HOME_DIRECTIONS[index]),
-                        c.reference_altitude])
+        pos = np.array([*(self.center[:2] + c.reference_ring_half_side * HOME_DIRECTIONS[index]), c.reference_altitude])
         yaw, pitch = look_at_angles(pos, self.center)
         return self._camera(pos, camera_rotation(yaw, pitch, 0.0), width, height)
 

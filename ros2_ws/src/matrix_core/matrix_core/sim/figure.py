@@ -22,8 +22,9 @@ def _label(img, text):
     return img
 
 
-def sim_vs_real(real_dir, out_png, configs=('simple', 'complex', 'modified'), seed=0, views=('D1', 'D4'),
-                frame=2, size=(480, 270)) -> Path:
+def sim_vs_real(
+    real_dir, out_png, configs=('simple', 'complex', 'modified'), seed=0, views=('D1', 'D4'), frame=2, size=(480, 270)
+) -> Path:
     real = open_dataset(real_dir)
     sims = []
     for config in configs:
@@ -32,11 +33,17 @@ def sim_vs_real(real_dir, out_png, configs=('simple', 'complex', 'modified'), se
         sims.append((config, sim))
     rows = []
     for view in views:
-        tiles = [_label(cv2.resize(real.load_image(view, frame), size, interpolation=cv2.INTER_AREA),
-                        f'real MATRIX {view} frame {frame}')]
+        tiles = [
+            _label(
+                cv2.resize(real.load_image(view, frame), size, interpolation=cv2.INTER_AREA),
+                f'real MATRIX {view} frame {frame}',
+            )
+        ]
         for config, sim in sims:
             _, s, _, _ = sim.render_view(sim.views.index(view))
-            tiles.append(_label(cv2.resize(s, size, interpolation=cv2.INTER_AREA), f'sim {config} {view} (seed {seed})'))
+            tiles.append(
+                _label(cv2.resize(s, size, interpolation=cv2.INTER_AREA), f'sim {config} {view} (seed {seed})')
+            )
         rows.append(np.hstack(tiles))
     out = Path(out_png)
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -22,10 +22,8 @@ _ANGLES = np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
 
 def annotation_box(camera, xy) -> BoundingBox:
     """Box of the projected 0.16 m x 1.8 m cylinder standing at ``xy`` (2,) metres (internal pixels)."""
-    ring = np.stack([xy[0] + CYLINDER_RADIUS_M * np.cos(_ANGLES),
-                     xy[1] + CYLINDER_RADIUS_M * np.sin(_ANGLES)], axis=1)
-    pts = np.concatenate([np.c_[ring, np.zeros(len(ring))],
-                          np.c_[ring, np.full(len(ring), CYLINDER_HEIGHT_M)]])
+    ring = np.stack([xy[0] + CYLINDER_RADIUS_M * np.cos(_ANGLES), xy[1] + CYLINDER_RADIUS_M * np.sin(_ANGLES)], axis=1)
+    pts = np.concatenate([np.c_[ring, np.zeros(len(ring))], np.c_[ring, np.full(len(ring), CYLINDER_HEIGHT_M)]])
     uv = camera.project(pts)
     foot = camera.project(np.array([[xy[0], xy[1], 0.0]]))[0]
     return BoundingBox(float(uv[:, 0].min()), float(uv[:, 1].min()), float(uv[:, 0].max()), float(foot[1]))
@@ -58,6 +56,5 @@ def view_truth(camera, drone=None) -> dict:
     if drone is not None:
         out['drone_position'] = [float(v) for v in drone.position]
         out['drone_velocity'] = [float(v) for v in drone.velocity]
-        out['gimbal_yaw_pitch_roll_rad'] = [float(drone.yaw), float(drone.pitch + drone.body_pitch),
-                                            float(drone.roll)]
+        out['gimbal_yaw_pitch_roll_rad'] = [float(drone.yaw), float(drone.pitch + drone.body_pitch), float(drone.roll)]
     return out

@@ -65,8 +65,15 @@ class Lighting:
         return int(round(self.shadow_factor * 256))
 
 
-DAY = Lighting(direction=np.array([0.45, 0.3, 0.84]) / np.linalg.norm([0.45, 0.3, 0.84]), sun=0.45,
-               ambient=0.55, shadow_factor=0.625, sky=DAY_SKY_BGR, tint=np.ones(3), plain=True)
+DAY = Lighting(
+    direction=np.array([0.45, 0.3, 0.84]) / np.linalg.norm([0.45, 0.3, 0.84]),
+    sun=0.45,
+    ambient=0.55,
+    shadow_factor=0.625,
+    sky=DAY_SKY_BGR,
+    tint=np.ones(3),
+    plain=True,
+)
 
 
 def sample_lighting(cfg, rng) -> Lighting:
@@ -88,6 +95,12 @@ def sample_lighting(cfg, rng) -> Lighting:
     warm = rng.normal(0.0, cfg.tint_std)  # light colour varies along the blue-amber axis
     tint = np.array([1.0 - warm, 1.0, 1.0 + warm]) * (1.0 + (DUSK_TINT_BGR - 1.0) * dusk)
     tint *= u(cfg.level) * (1.0 - 0.15 * dusk)
-    return Lighting(direction=direction, sun=sun, ambient=ambient, shadow_factor=shadow,
-                    sky=tuple(float(v) for v in np.clip(sky, 0, 255)), tint=tint,
-                    facade_level=1.0 - cfg.dusk_facade_dimming * dusk)
+    return Lighting(
+        direction=direction,
+        sun=sun,
+        ambient=ambient,
+        shadow_factor=shadow,
+        sky=tuple(float(v) for v in np.clip(sky, 0, 255)),
+        tint=tint,
+        facade_level=1.0 - cfg.dusk_facade_dimming * dusk,
+    )

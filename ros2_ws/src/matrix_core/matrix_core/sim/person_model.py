@@ -31,8 +31,15 @@ NECK_R = 0.05
 DRESS_TOP, DRESS_HEM_Z, DRESS_HEM_R = (WAIST_Z, 0.10, 0.15), 0.34, 0.21
 
 # Ring layout per person: index ranges of each part (legs and arms: left then right).
-PARTS = {'leg_l': (0, 2), 'leg_r': (2, 4), 'arm_l': (4, 6), 'arm_r': (6, 8), 'torso': (8, 11),
-         'neck': (11, 13), 'dress': (13, 15)}
+PARTS = {
+    'leg_l': (0, 2),
+    'leg_r': (2, 4),
+    'arm_l': (4, 6),
+    'arm_r': (6, 8),
+    'torso': (8, 11),
+    'neck': (11, 13),
+    'dress': (13, 15),
+}
 N_RINGS = 15
 LIT_PARTS = ('leg_l', 'leg_r', 'torso', 'dress')  # drawn with a lit side (arms, neck: too thin to show)
 
@@ -57,8 +64,7 @@ def max_reach(height: float) -> tuple:
     amp = np.radians(SWING_DEG)
     foot = HIP_Z * height * np.sin(amp) + LEG_R_FOOT * s
     hand = np.hypot(ARM_HALF * s, ARM_LEN * height * np.sin(0.7 * amp)) + ARM_R_HAND * s
-    return float(max(foot, hand, np.hypot(ARM_HALF * s, ARM_R_TOP * s) + ARM_R_TOP * s, DRESS_HEM_R * s)), \
-        float(height)
+    return float(max(foot, hand, np.hypot(ARM_HALF * s, ARM_R_TOP * s) + ARM_R_TOP * s, DRESS_HEM_R * s)), float(height)
 
 
 def body_rings(positions, heights, headings, phases, swings) -> tuple:
@@ -110,13 +116,17 @@ def body_rings(positions, heights, headings, phases, swings) -> tuple:
     put(14, positions, DRESS_HEM_Z * h, DRESS_HEM_R * s, DRESS_HEM_R * s)
 
     cos, sin = np.cos(RING_ANGLES), np.sin(RING_ANGLES)
-    offs = (depth[..., None, None] * cos[:, None] * fwd[:, None, None, :]
-            + width[..., None, None] * sin[:, None] * lat[:, None, None, :])  # (N, K, R, 2)
+    offs = (
+        depth[..., None, None] * cos[:, None] * fwd[:, None, None, :]
+        + width[..., None, None] * sin[:, None] * lat[:, None, None, :]
+    )  # (N, K, R, 2)
     rings = np.empty((n, N_RINGS, len(RING_ANGLES), 3))
     rings[..., :2] = centers[:, :, None, :2] + offs
     rings[..., 2] = centers[:, :, None, 2]
-    normals = (cos[:, None] * fwd[:, None, None, :] * width[..., None, None]
-               + sin[:, None] * lat[:, None, None, :] * depth[..., None, None])
+    normals = (
+        cos[:, None] * fwd[:, None, None, :] * width[..., None, None]
+        + sin[:, None] * lat[:, None, None, :] * depth[..., None, None]
+    )
     normals /= np.maximum(np.linalg.norm(normals, axis=-1, keepdims=True), 1e-9)
     return rings, centers, normals
 

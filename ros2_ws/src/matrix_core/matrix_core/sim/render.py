@@ -27,8 +27,7 @@ import numpy as np
 from matrix_core.sim.appearance import LIT, SHADED
 from matrix_core.sim.lighting import DAY, UP
 from matrix_core.sim.person_model import LIT_PARTS, PARTS, RING_ANGLES, body_rings, head_centers
-from matrix_core.sim.raster import (SHIFT, clip_half_plane_2d, clip_near, fixed, project_camera_points,
-                                    to_camera)
+from matrix_core.sim.raster import SHIFT, clip_half_plane_2d, clip_near, fixed, project_camera_points, to_camera
 from matrix_core.sim.distractors import shadow_hulls
 from matrix_core.sim.scene import box_faces
 
@@ -59,10 +58,12 @@ class People:
         """(headings, phases, swings, dress) with the defaults filled in, each (N,)."""
         n = len(self.ids)
         zeros = np.zeros(n)
-        return (zeros if self.headings is None else np.asarray(self.headings, float),
-                zeros if self.phases is None else np.asarray(self.phases, float),
-                zeros if self.swings is None else np.asarray(self.swings, float),
-                np.zeros(n, bool) if self.dress is None else np.asarray(self.dress, bool))
+        return (
+            zeros if self.headings is None else np.asarray(self.headings, float),
+            zeros if self.phases is None else np.asarray(self.phases, float),
+            zeros if self.swings is None else np.asarray(self.swings, float),
+            np.zeros(n, bool) if self.dress is None else np.asarray(self.dress, bool),
+        )
 
 
 def _in_front_of_box(point_xy, bounds, camera_xy) -> bool:
@@ -83,8 +84,12 @@ def _draw_order(items, camera_xy) -> list:
     """
     n = len(items)
     rects = np.array([it['rect'] for it in items]).reshape(n, 4)
-    overlap = ((rects[:, None, 0] < rects[None, :, 2]) & (rects[None, :, 0] < rects[:, None, 2])
-               & (rects[:, None, 1] < rects[None, :, 3]) & (rects[None, :, 1] < rects[:, None, 3]))
+    overlap = (
+        (rects[:, None, 0] < rects[None, :, 2])
+        & (rects[None, :, 0] < rects[:, None, 2])
+        & (rects[:, None, 1] < rects[None, :, 3])
+        & (rects[None, :, 1] < rects[:, None, 3])
+    )
     after = [[] for _ in range(n)]
     indeg = [0] * n
     for a, b in zip(*np.nonzero(np.triu(overlap, 1))):
@@ -176,8 +181,15 @@ class Renderer:
         tex = self._lit_texture(tex, self.light.gain(UP))
         rows_H_img = np.array([[1.0, 0, 0], [0, 1.0, -top], [0, 0, 1.0]])  # image rows top.. -> 0..
         rows_H_tex = rows_H_img @ camera.img_H_ground(0.0) @ np.linalg.inv(t_H_g)
-        cv2.warpPerspective(tex, rows_H_tex, (W, H - top), dst=img[top:], flags=cv2.INTER_LINEAR,
-                            borderMode=cv2.BORDER_CONSTANT, borderValue=sky_bgr)
+        cv2.warpPerspective(
+            tex,
+            rows_H_tex,
+            (W, H - top),
+            dst=img[top:],
+            flags=cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_CONSTANT,
+            borderValue=sky_bgr,
+        )
         sky = clip_half_plane_2d(rect, ray_z + np.array([0.0, 0.0, 0.01]))
         if len(sky) >= 3:
             cv2.fillConvexPoly(img, fixed(sky), sky_bgr, cv2.LINE_AA, SHIFT)
@@ -203,8 +215,9 @@ class Renderer:
             shift = np.array([[1.0, 0, -x0], [0, 1.0, -y0], [0, 0, 1.0]])
             gain = self.light.gain(normal_out[id(f)]) * self.light.facade_level
             texture = self._lit_texture(f.texture, gain, emissive_red=LIT_WINDOW_RED)
-            patch = cv2.warpPerspective(texture, shift @ H_tex, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR,
-                                        borderMode=cv2.BORDER_REPLICATE)
+            patch = cv2.warpPerspective(
+                texture, shift @ H_tex, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+            )
             mask = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
             cv2.fillConvexPoly(mask, fixed(uv - [x0, y0]), 255, cv2.LINE_8, SHIFT)
             roi = img[y0:y1, x0:x1]
@@ -276,8 +289,10 @@ class Renderer:
         key = (tuple(np.round(offset, 9)), len(self.scene.rounds))
         if getattr(self, '_round_shadow_key', None) != key:
             self._round_shadow_key = key
-            hulls = [cv2.convexHull(p.astype(np.float32)).reshape(-1, 2).astype(float)
-                     for p in shadow_hulls(self.scene.rounds, offset)]
+            hulls = [
+                cv2.convexHull(p.astype(np.float32)).reshape(-1, 2).astype(float)
+                for p in shadow_hulls(self.scene.rounds, offset)
+            ]
             self._round_shadow_hulls = [np.c_[h, np.zeros(len(h))] for h in hulls]  # (M, 3) on z = 0
         H, W = camera.height, camera.width
         out = []
@@ -345,8 +360,11 @@ class Renderer:
         lo = np.minimum(np.nanmin(big, axis=1), head_uv[:, 0] - head_r[:, None])
         hi = np.maximum(np.nanmax(big, axis=1), head_uv[:, 0] + head_r[:, None])
         ok &= (hi[:, 0] >= 0) & (hi[:, 1] >= 0) & (lo[:, 0] <= camera.width) & (lo[:, 1] <= camera.height)
-        lit_ok = {name: lit[:, a:b].any(axis=2).all(axis=1) & (lit[:, a:b].sum(axis=(1, 2)) >= 3)
-                  for name, (a, b) in PARTS.items() if name in LIT_PARTS}
+        lit_ok = {
+            name: lit[:, a:b].any(axis=2).all(axis=1) & (lit[:, a:b].sum(axis=(1, 2)) >= 3)
+            for name, (a, b) in PARTS.items()
+            if name in LIT_PARTS
+        }
         depth = np.linalg.norm(camera.center[:2] - people.positions, axis=1)
         colors = people.colors.astype(float)
         if colors.shape[1] < 4:  # no hair colour given: dark hair
@@ -416,8 +434,10 @@ class Renderer:
             hull = cv2.convexHull(uv.astype(np.float32)).reshape(-1, 2)
             parts.append(('poly', hull, tuple(float(c) * side * t for c, t in zip(color, tint))))
         for z, radius, color in rnd.spheres:
-            for center, r, shade in ((np.array([*rnd.xy, z]), radius, 0.6),
-                                     (np.array([*rnd.xy, z]) + 0.35 * radius * sun, 0.55 * radius, 1.0)):
+            for center, r, shade in (
+                (np.array([*rnd.xy, z]), radius, 0.6),
+                (np.array([*rnd.xy, z]) + 0.35 * radius * sun, 0.55 * radius, 1.0),
+            ):
                 c_cam = to_camera(camera, center)
                 if c_cam[2] < 0.3 + radius:
                     return None
@@ -436,22 +456,46 @@ class Renderer:
             entry = self._round_parts(camera, rnd)
             if entry is None or entry[0][2] < 0 or entry[0][3] < 0 or entry[0][0] > W or entry[0][1] > H:
                 continue
-            items.append({'kind': 'round', 'depth': float(np.linalg.norm(cam_xy - rnd.xy)), 'rect': entry[0],
-                          'parts': entry[1], 'xy': rnd.xy, 'id': 0})
+            items.append(
+                {
+                    'kind': 'round',
+                    'depth': float(np.linalg.norm(cam_xy - rnd.xy)),
+                    'rect': entry[0],
+                    'parts': entry[1],
+                    'xy': rnd.xy,
+                    'id': 0,
+                }
+            )
         for bounds, height, cfg in self.scene.boxes:
             polys = self._box_polys(camera, bounds, height, cfg)
             if not polys:
                 continue
             allp = np.concatenate([p for p, _ in polys])
             center = np.array([(bounds[0] + bounds[2]) / 2, (bounds[1] + bounds[3]) / 2])
-            items.append({'kind': 'box', 'depth': float(np.linalg.norm(cam_xy - center)), 'bounds': bounds,
-                          'xy': center, 'rect': (*allp.min(axis=0), *allp.max(axis=0)), 'polys': polys})
+            items.append(
+                {
+                    'kind': 'box',
+                    'depth': float(np.linalg.norm(cam_xy - center)),
+                    'bounds': bounds,
+                    'xy': center,
+                    'rect': (*allp.min(axis=0), *allp.max(axis=0)),
+                    'polys': polys,
+                }
+            )
         if people is not None and len(people.ids):
             for k, entry in enumerate(self._person_polys(camera, people)):
                 if entry is not None:
                     depth, rect, parts = entry
-                    items.append({'kind': 'person', 'depth': depth, 'rect': rect, 'parts': parts,
-                                  'xy': people.positions[k], 'id': int(people.ids[k]) + 1})
+                    items.append(
+                        {
+                            'kind': 'person',
+                            'depth': depth,
+                            'rect': rect,
+                            'parts': parts,
+                            'xy': people.positions[k],
+                            'id': int(people.ids[k]) + 1,
+                        }
+                    )
         if not items:
             return
         for i in _draw_order(items, cam_xy):

@@ -11,8 +11,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from matrix_core.sim.distractors import Distractors
-from matrix_core.sim.textures import (facade_style, facade_texture, ground_style, ground_texture,
-                                      styled_facade_texture, tex_H_ground, texture_pyramid)
+from matrix_core.sim.textures import (
+    facade_style,
+    facade_texture,
+    ground_style,
+    ground_texture,
+    styled_facade_texture,
+    tex_H_ground,
+    texture_pyramid,
+)
 
 # Marker id of board b's inner corner (i, j), i, j = 1..n-1: 1000 * (b + 1) + (j - 1) * (n - 1) + (i - 1).
 BOARD_MARKER_BASE = 1000
@@ -40,8 +47,10 @@ def board_corners(board, index: int) -> tuple:
     n = board.squares
     ii, jj = np.meshgrid(np.arange(1, n), np.arange(1, n))
     ids = BOARD_MARKER_BASE * (index + 1) + (jj - 1) * (n - 1) + (ii - 1)
-    xyz = np.stack([board.origin[0] + ii * board.square_m, board.origin[1] + jj * board.square_m,
-                    np.full(ii.shape, board.z)], axis=-1)
+    xyz = np.stack(
+        [board.origin[0] + ii * board.square_m, board.origin[1] + jj * board.square_m, np.full(ii.shape, board.z)],
+        axis=-1,
+    )
     return ids.reshape(-1), xyz.reshape(-1, 3)
 
 
@@ -50,9 +59,13 @@ def box_faces(bounds, height: float) -> list:
     x0, y0, x1, y1 = bounds
     b = [[x0, y0, 0], [x1, y0, 0], [x1, y1, 0], [x0, y1, 0]]
     t = [[x, y, height] for x, y, _ in b]
-    faces = [([b[0], b[1], t[1], t[0]], [0, -1, 0]), ([b[1], b[2], t[2], t[1]], [1, 0, 0]),
-             ([b[2], b[3], t[3], t[2]], [0, 1, 0]), ([b[3], b[0], t[0], t[3]], [-1, 0, 0]),
-             (t, [0, 0, 1])]
+    faces = [
+        ([b[0], b[1], t[1], t[0]], [0, -1, 0]),
+        ([b[1], b[2], t[2], t[1]], [1, 0, 0]),
+        ([b[2], b[3], t[3], t[2]], [0, 1, 0]),
+        ([b[3], b[0], t[0], t[3]], [-1, 0, 0]),
+        (t, [0, 0, 1]),
+    ]
     return [(np.array(c, dtype=float), np.array(n, dtype=float)) for c, n in faces]
 
 
@@ -67,8 +80,7 @@ class Scene:
             objects, ground materials, facade styles); None for the plain scene.
     """
 
-    def __init__(self, config, rng: np.random.Generator, m_per_px: float,
-                 variety_rng: np.random.Generator = None):
+    def __init__(self, config, rng: np.random.Generator, m_per_px: float, variety_rng: np.random.Generator = None):
         self.config = config
         cx, cy = config.center
         r = config.building_distance + 2.0
@@ -77,13 +89,14 @@ class Scene:
         dcfg = config.distractors if variety_rng is not None else None
         on = dcfg is not None and dcfg.enabled
         # Separate streams, so that e.g. changing the distractor counts keeps the ground and the facades.
-        place_rng, ground_rng, facade_rng = (variety_rng.spawn(3) if variety_rng is not None else (None,) * 3)
+        place_rng, ground_rng, facade_rng = variety_rng.spawn(3) if variety_rng is not None else (None,) * 3
         self.distractors = Distractors(config, place_rng)
         g_style = ground_style(ground_rng, config) if on and dcfg.ground_variety else None
         self.facade_style = facade_style(facade_rng) if on and dcfg.facade_variety else None
         base = ground_texture(config, self.extent, m_per_px, rng, g_style)
-        self.ground_levels = [(img, tex_H_ground(self.extent, m_per_px * 2 ** k))
-                              for k, img in enumerate(texture_pyramid(base, 4))]
+        self.ground_levels = [
+            (img, tex_H_ground(self.extent, m_per_px * 2**k)) for k, img in enumerate(texture_pyramid(base, 4))
+        ]
         self.boxes = [(b.bounds, b.height, b) for b in list(config.obstacles) + self.distractors.boxes]
         self.rounds = self.distractors.rounds  # vertical distractors (poles, posts, trees...), see distractors.py
         self.facades, self.building_boxes = self._buildings(rng)
@@ -100,8 +113,12 @@ class Scene:
         lo, hi = self.config.building_height
         facades, boxes = [], []
         # Walk each side so that the facade faces the centre: (start corner, direction, inward normal).
-        sides = [((cx - d, cy + d), (1, 0), (0, -1)), ((cx + d, cy + d), (0, -1), (-1, 0)),
-                 ((cx + d, cy - d), (-1, 0), (0, 1)), ((cx - d, cy - d), (0, 1), (1, 0))]
+        sides = [
+            ((cx - d, cy + d), (1, 0), (0, -1)),
+            ((cx + d, cy + d), (0, -1), (-1, 0)),
+            ((cx + d, cy - d), (-1, 0), (0, 1)),
+            ((cx - d, cy - d), (0, 1), (1, 0)),
+        ]
         for start, direction, inward in sides:
             start, direction, inward = (np.array(v, dtype=float) for v in (start, direction, inward))
             s = 0.0
@@ -113,8 +130,11 @@ class Scene:
                 right_dir = np.array([-inward[1], inward[0]])
                 left, right = (a, b) if a @ right_dir < b @ right_dir else (b, a)
                 corners = np.array([[*left, h], [*right, h], [*right, 0.0], [*left, 0.0]])
-                tex = (facade_texture(rng, w, h) if self.facade_style is None
-                       else styled_facade_texture(rng, w, h, self.facade_style))
+                tex = (
+                    facade_texture(rng, w, h)
+                    if self.facade_style is None
+                    else styled_facade_texture(rng, w, h, self.facade_style)
+                )
                 facades.append(Facade(corners, tex))
                 back = np.array([a, b, a - inward * 10.0, b - inward * 10.0])
                 boxes.append(((back[:, 0].min(), back[:, 1].min(), back[:, 0].max(), back[:, 1].max()), h))
@@ -134,7 +154,7 @@ class Scene:
     def occluders(self) -> list:
         """Every occluding box as ((x0, y0, x1, y1), height): obstacles, distractors (vertical ones by their
         bounding square) and buildings."""
-        return ([(b, h) for b, h, _ in self.boxes] + self.distractors.round_boxes() + list(self.building_boxes))
+        return [(b, h) for b, h, _ in self.boxes] + self.distractors.round_boxes() + list(self.building_boxes)
 
     def crowd_config(self):
         """The scene config the crowd walks in: the distractors inside the area added as obstacles."""

@@ -75,9 +75,18 @@ class Simulation:
     def people(self) -> People:
         c = self.config.crowd
         cr = self.crowd
-        return People(cr.ids, cr.positions, cr.heights, self.colors, c.leg_radius, c.body_radius,
-                      cr.headings, gait_phase(cr.walked, cr.heights, cr.ids),
-                      swing_amplitude(cr.speeds) if c.walking_pose else None, self.dress)
+        return People(
+            cr.ids,
+            cr.positions,
+            cr.heights,
+            self.colors,
+            c.leg_radius,
+            c.body_radius,
+            cr.headings,
+            gait_phase(cr.walked, cr.heights, cr.ids),
+            swing_amplitude(cr.speeds) if c.walking_pose else None,
+            self.dress,
+        )
 
     def positions(self) -> dict:
         """person id -> (3,) foot point, metres."""
@@ -116,12 +125,13 @@ def write_frame(sim: Simulation, writer: MatrixWriter, frame: int, out: Path) ->
                 boxes[int(pid)][view] = annotation_box(cam, xy)
                 seen[int(pid)] = positions[int(pid)]
         writer.write_line_of_sight(view, frame, seen)
-        ids, uv = visible_markers(cam, sim.scene.marker_ids, sim.scene.marker_xyz, sim.scene.occluders,
-                                  rays_blocked)
+        ids, uv = visible_markers(cam, sim.scene.marker_ids, sim.scene.marker_xyz, sim.scene.occluders, rays_blocked)
         writer.write_plane_points(view, frame, ids, uv)
         truth[view] = view_truth(cam, sim.fleet.drones[k])
-    persons = [PersonAnnotation(pid, world_to_position_id(positions[pid][:2]), positions[pid][:2], boxes[pid])
-               for pid in sorted(positions)]
+    persons = [
+        PersonAnnotation(pid, world_to_position_id(positions[pid][:2]), positions[pid][:2], boxes[pid])
+        for pid in sorted(positions)
+    ]
     writer.write_annotations(frame, persons, sim.views)
     writer.write_pedestrians(frame, positions)
     path = out / 'sim_ground_truth' / f'{frame:04d}.json'
@@ -143,9 +153,15 @@ def simulate(settings, progress: bool = True) -> Path:
     config = load_scene_config(settings.config)
     replay = open_dataset(settings.replay) if settings.replay else None
     sim = Simulation(config, settings.seed, settings.width, settings.height, replay)
-    meta = {'simulator': {'config': scene_config_to_dict(config), 'seed': settings.seed,
-                          'frame_period': settings.frame_period, 'replay': settings.replay or None},
-            'image_size': [settings.width, settings.height]}
+    meta = {
+        'simulator': {
+            'config': scene_config_to_dict(config),
+            'seed': settings.seed,
+            'frame_period': settings.frame_period,
+            'replay': settings.replay or None,
+        },
+        'image_size': [settings.width, settings.height],
+    }
     writer = MatrixWriter(out, area=tuple(config.area), image_ext=settings.image_ext, extra_meta=meta)
     writer.write_plane_markers({int(i): p for i, p in zip(sim.scene.marker_ids, sim.scene.marker_xyz)})
     for k, view in enumerate(sim.views):
@@ -158,8 +174,7 @@ def simulate(settings, progress: bool = True) -> Path:
         bag.__enter__()
     failed, written, stopped = {}, [], 'interrupted'
     try:
-        for frame in tqdm(range(settings.frames), desc=f'simulate {config.name}', unit='frame',
-                          disable=not progress):
+        for frame in tqdm(range(settings.frames), desc=f'simulate {config.name}', unit='frame', disable=not progress):
             try:
                 if frame > 0:
                     sim.step(settings.frame_period)
@@ -174,7 +189,7 @@ def simulate(settings, progress: bool = True) -> Path:
         stopped = ''
     finally:
         if bag is not None:
-            bag.__exit__(None, None, None)   # closed on any exit: the frames written stay readable
+            bag.__exit__(None, None, None)  # closed on any exit: the frames written stay readable
         write_summary(out, settings.frames, written, failed, stopped)
     return out
 
@@ -185,9 +200,14 @@ SUMMARY_FILE = 'simulate_summary.json'
 def write_summary(out: Path, requested: int, written: list, failed: dict, stopped: str = '') -> dict:
     """``OUT/simulate_summary.json``: frames requested and written, each failed frame with its reason, and
     ``stopped`` ('interrupted' when the run ended before its last frame)."""
-    summary = {'frames_requested': requested, 'frames_written': len(written), 'frames_failed': len(failed),
-               'failed_frames': [{'frame': f, 'reason': r} for f, r in sorted(failed.items())],
-               'stopped': stopped, 'last_frame_written': written[-1] if written else None}
+    summary = {
+        'frames_requested': requested,
+        'frames_written': len(written),
+        'frames_failed': len(failed),
+        'failed_frames': [{'frame': f, 'reason': r} for f, r in sorted(failed.items())],
+        'stopped': stopped,
+        'last_frame_written': written[-1] if written else None,
+    }
     (out / SUMMARY_FILE).write_text(json.dumps(summary, indent=1) + '\n')
     return summary
 
@@ -199,6 +219,9 @@ def remove_frame_files(out: Path, frame: int) -> None:
     tag = f'{frame:04d}'
     for path in out.rglob('*'):
         rel = path.relative_to(out).parts
-        if path.is_file() and rel[0] not in ('reference', 'bag') and \
-                (path.stem == tag or path.stem.endswith('_' + tag)):
+        if (
+            path.is_file()
+            and rel[0] not in ('reference', 'bag')
+            and (path.stem == tag or path.stem.endswith('_' + tag))
+        ):
             path.unlink()

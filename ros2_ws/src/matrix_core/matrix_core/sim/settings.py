@@ -7,26 +7,31 @@ from matrix_core.bags.clock import DEFAULT_CLOCK
 
 @dataclass
 class SimulateSettings:
-    config: str = field(default='complex', metadata={
-        'help': 'scene variant (simple, complex, modified) or the path of a YAML scene file'})
+    config: str = field(
+        default='complex',
+        metadata={'help': 'scene variant (simple, complex, modified) or the path of a YAML scene file'},
+    )
     frames: int = field(default=10, metadata={'help': 'number of time steps to generate'})
-    seed: int = field(default=0, metadata={
-        'help': 'random seed: the same seed gives the same sequence (byte-identical annotations)'})
+    seed: int = field(
+        default=0, metadata={'help': 'random seed: the same seed gives the same sequence (byte-identical annotations)'}
+    )
     out: str = field(default='out/sim', metadata={'help': 'output MATRIX folder (must be empty or absent)'})
     width: int = field(default=1920, metadata={'help': 'image width in pixels (the paper used 1920x1080)'})
     height: int = field(default=1080, metadata={'help': 'image height in pixels'})
-    fast: bool = field(default=False, metadata={
-        'help': 'fast low-resolution mode: 640x360 (overrides width/height)'})
+    fast: bool = field(default=False, metadata={'help': 'fast low-resolution mode: 640x360 (overrides width/height)'})
     image_ext: str = field(default='.png', metadata={'help': '.png (lossless) or .jpg (smaller, faster)'})
     bag: bool = field(default=False, metadata={'help': 'also write a rosbag2 (MCAP) into OUT/bag'})
-    compressed: bool = field(default=False, metadata={
-        'help': 'bag images as sensor_msgs/CompressedImage (JPEG) instead of sensor_msgs/Image'})
-    replay: str = field(default='', metadata={
-        'help': 'MATRIX folder whose matchings/Pedestrians trajectories replace the crowd model'})
-    frame_period: float = field(default=DEFAULT_CLOCK.frame_period, metadata={
-        'help': 'seconds between frames'})
-    start_time: float = field(default=DEFAULT_CLOCK.start_time, metadata={
-        'help': 'bag header stamp of the first frame, seconds'})
+    compressed: bool = field(
+        default=False,
+        metadata={'help': 'bag images as sensor_msgs/CompressedImage (JPEG) instead of sensor_msgs/Image'},
+    )
+    replay: str = field(
+        default='', metadata={'help': 'MATRIX folder whose matchings/Pedestrians trajectories replace the crowd model'}
+    )
+    frame_period: float = field(default=DEFAULT_CLOCK.frame_period, metadata={'help': 'seconds between frames'})
+    start_time: float = field(
+        default=DEFAULT_CLOCK.start_time, metadata={'help': 'bag header stamp of the first frame, seconds'}
+    )
 
     def __post_init__(self):
         if self.fast:

@@ -39,16 +39,18 @@ def value_noise(shape, m_per_px: float, cell_m: float, rng: np.random.Generator)
     lattice = rng.uniform(-1.0, 1.0, (n_r, n_c)).astype(np.float32)
     if cell_m <= 2 * m_per_px:  # finer than the sampling: plain per-pixel grain
         return rng.uniform(-1.0, 1.0, (rows, cols)).astype(np.float32)
-    big = cv2.resize(lattice, (int(round(n_c * cell_m / m_per_px)), int(round(n_r * cell_m / m_per_px))),
-                     interpolation=cv2.INTER_CUBIC)
+    big = cv2.resize(
+        lattice,
+        (int(round(n_c * cell_m / m_per_px)), int(round(n_r * cell_m / m_per_px))),
+        interpolation=cv2.INTER_CUBIC,
+    )
     return big[:rows, :cols]
 
 
 def _world_axes(extent, shape, m_per_px):
     x_min, _, _, y_max = extent
     rows, cols = shape
-    return (x_min + np.arange(cols, dtype=np.float32) * m_per_px,
-            y_max - np.arange(rows, dtype=np.float32) * m_per_px)
+    return (x_min + np.arange(cols, dtype=np.float32) * m_per_px, y_max - np.arange(rows, dtype=np.float32) * m_per_px)
 
 
 def _bond_shade(extent, shape, m_per_px, rng, w, h, joint, spread, joint_shade, running=True) -> np.ndarray:
@@ -92,8 +94,7 @@ class GroundStyle:
 def ground_style(rng: np.random.Generator, config) -> GroundStyle:
     """Draw a :class:`GroundStyle`: mostly light concrete inside like the real square, sometimes tiles,
     cobblestone or asphalt; a darker paving, asphalt or cobblestone surround."""
-    inside = str(rng.choice(['cement', 'tiles', 'cobblestone', 'asphalt', config.floor],
-                            p=[0.3, 0.3, 0.1, 0.1, 0.2]))
+    inside = str(rng.choice(['cement', 'tiles', 'cobblestone', 'asphalt', config.floor], p=[0.3, 0.3, 0.1, 0.1, 0.2]))
     base = np.asarray(config.floor_color, dtype=float)
     if inside == 'asphalt':
         base = np.full(3, rng.uniform(70, 105))
@@ -102,9 +103,16 @@ def ground_style(rng: np.random.Generator, config) -> GroundStyle:
     surround = str(rng.choice(['pavers', 'asphalt', 'cobblestone']))
     s_tone = rng.uniform(60, 100) if surround == 'asphalt' else rng.uniform(95, 145)
     s_base = np.full(3, s_tone) + rng.uniform(-8, 8, 3)
-    return GroundStyle(inside, tuple(base), float(rng.uniform(0.4, 1.0)), surround, tuple(s_base),
-                       float(rng.uniform(8.0, 30.0)), tuple(rng.uniform([0.88, 0.94, 0.98], [0.96, 0.99, 1.02])),
-                       int(rng.integers(0, 4)))
+    return GroundStyle(
+        inside,
+        tuple(base),
+        float(rng.uniform(0.4, 1.0)),
+        surround,
+        tuple(s_base),
+        float(rng.uniform(8.0, 30.0)),
+        tuple(rng.uniform([0.88, 0.94, 0.98], [0.96, 0.99, 1.02])),
+        int(rng.integers(0, 4)),
+    )
 
 
 def _material_shade(material, extent, shape, m_per_px, rng, tile_m) -> np.ndarray:
@@ -129,8 +137,7 @@ def _line_mask(extent, shape, m_per_px, positions, width_m, axis: int) -> np.nda
     return np.broadcast_to(hit[None, :] if axis == 0 else hit[:, None], shape)
 
 
-def ground_texture(config, extent, m_per_px: float, rng: np.random.Generator,
-                   style: GroundStyle = None) -> np.ndarray:
+def ground_texture(config, extent, m_per_px: float, rng: np.random.Generator, style: GroundStyle = None) -> np.ndarray:
     """Top-down (rows, cols, 3) BGR uint8 image of the whole ground within ``extent`` (no checkerboards:
     those are drawn as exact polygons by the renderer).
 
@@ -166,8 +173,12 @@ def _ground_base(config, extent, m_per_px, rng) -> tuple:
     xs, ys = _world_axes(extent, shape, m_per_px)
     ax0, ay0, ax1, ay1 = config.area
     inside = ((xs[None, :] >= ax0) & (xs[None, :] <= ax1)) & ((ys[:, None] >= ay0) & (ys[:, None] <= ay1))
-    shade = (9.0 * value_noise(shape, m_per_px, 5.0, rng) + 7.0 * value_noise(shape, m_per_px, 0.7, rng)
-             + 4.0 * value_noise(shape, m_per_px, 0.12, rng) + 5.0 * value_noise(shape, m_per_px, 0.01, rng))
+    shade = (
+        9.0 * value_noise(shape, m_per_px, 5.0, rng)
+        + 7.0 * value_noise(shape, m_per_px, 0.7, rng)
+        + 4.0 * value_noise(shape, m_per_px, 0.12, rng)
+        + 5.0 * value_noise(shape, m_per_px, 0.01, rng)
+    )
     return shape, xs, ys, inside, shade
 
 
@@ -180,26 +191,39 @@ def _paint_markings(img, config, extent, m_per_px, xs, ys, inside) -> None:
     half_w = (ax1 - ax0) / 2
     joints = [cx + d for d in np.arange(-half_w, half_w + 1e-6, (ax1 - ax0) / 4)]
     joints_y = [cy + d for d in np.arange(-half_w, half_w + 1e-6, (ay1 - ay0) / 4)]
-    lines = (_line_mask(extent, shape, m_per_px, joints, 0.08, 0)
-             | _line_mask(extent, shape, m_per_px, joints_y, 0.08, 1))
+    lines = _line_mask(extent, shape, m_per_px, joints, 0.08, 0) | _line_mask(
+        extent, shape, m_per_px, joints_y, 0.08, 1
+    )
     img[lines & inside] *= 0.62
-    outline = (_line_mask(extent, shape, m_per_px, [ax0, ax1], 0.3, 0)
-               | _line_mask(extent, shape, m_per_px, [ay0, ay1], 0.3, 1))
-    box = ((xs[None, :] >= ax0 - 0.2) & (xs[None, :] <= ax1 + 0.2)
-           & (ys[:, None] >= ay0 - 0.2) & (ys[:, None] <= ay1 + 0.2))
+    outline = _line_mask(extent, shape, m_per_px, [ax0, ax1], 0.3, 0) | _line_mask(
+        extent, shape, m_per_px, [ay0, ay1], 0.3, 1
+    )
+    box = (
+        (xs[None, :] >= ax0 - 0.2)
+        & (xs[None, :] <= ax1 + 0.2)
+        & (ys[:, None] >= ay0 - 0.2)
+        & (ys[:, None] <= ay1 + 0.2)
+    )
     img[outline & box] = (55, 55, 58)
 
 
 def _styled_ground(config, extent, m_per_px, rng, style: GroundStyle) -> np.ndarray:
     shape, xs, ys, inside, shade = _ground_base(config, extent, m_per_px, rng)
     ax0, ay0, ax1, ay1 = config.area
-    shade += np.where(inside, _material_shade(style.inside, extent, shape, m_per_px, rng, style.tile_m),
-                      _material_shade(style.surround, extent, shape, m_per_px, rng, style.tile_m))
+    shade += np.where(
+        inside,
+        _material_shade(style.inside, extent, shape, m_per_px, rng, style.tile_m),
+        _material_shade(style.surround, extent, shape, m_per_px, rng, style.tile_m),
+    )
     stains = value_noise(shape, m_per_px, 1.5, rng)
     shade -= 22.0 * np.clip(stains - 0.55, 0.0, None) / 0.45
     dirt = np.clip(value_noise(shape, m_per_px, 4.0, rng) - 0.5, 0.0, None) / 0.5  # large dirty patches
-    img = np.where(inside[..., None], np.asarray(style.inside_color, np.float32),
-                   np.asarray(style.surround_color, np.float32)) + shade[..., None]
+    img = (
+        np.where(
+            inside[..., None], np.asarray(style.inside_color, np.float32), np.asarray(style.surround_color, np.float32)
+        )
+        + shade[..., None]
+    )
     img -= (style.dirt * dirt)[..., None]
     img *= 1.0 + (np.asarray(style.dirt_tint, np.float32) - 1.0) * np.minimum(dirt * 2.0, 1.0)[..., None]
     if config.markings:
@@ -229,8 +253,7 @@ def texture_pyramid(texture: np.ndarray, levels: int) -> list:
     return out
 
 
-def facade_texture(rng: np.random.Generator, width_m: float, height_m: float,
-                   px_per_m: float = 8.0) -> np.ndarray:
+def facade_texture(rng: np.random.Generator, width_m: float, height_m: float, px_per_m: float = 8.0) -> np.ndarray:
     """(rows, cols, 3) BGR facade: stone/brick colour, window grid with some lit windows, a darker ground
     floor. Row 0 is the TOP of the facade."""
     cols, rows = max(8, int(width_m * px_per_m)), max(8, int(height_m * px_per_m))
@@ -250,7 +273,7 @@ def facade_texture(rng: np.random.Generator, width_m: float, height_m: float,
             r0, r1 = int((height_m - top - 0.6) * px_per_m), int((height_m - top + 1.2) * px_per_m)
             c0, c1 = int(x0 * px_per_m), int((x0 + win_w) * px_per_m)
             cv2.rectangle(img, (c0, max(r0, 0)), (c1, r1), color, -1)
-    img[int((height_m - 3.5) * px_per_m):] *= 0.7
+    img[int((height_m - 3.5) * px_per_m) :] *= 0.7
     return np.clip(img, 0, 255).astype(np.uint8)
 
 
@@ -260,8 +283,9 @@ def facade_style(rng: np.random.Generator) -> str:
     return 'dusk' if rng.random() < 0.6 else 'day'
 
 
-def styled_facade_texture(rng: np.random.Generator, width_m: float, height_m: float, style: str,
-                          px_per_m: float = 8.0) -> np.ndarray:
+def styled_facade_texture(
+    rng: np.random.Generator, width_m: float, height_m: float, style: str, px_per_m: float = 8.0
+) -> np.ndarray:
     """(rows, cols, 3) BGR facade of a ``style`` (see :func:`facade_style`) with random storey height,
     window size and spacing, and often a street-level shop front (glass band under a coloured sign).
     Row 0 is the TOP of the facade."""
@@ -295,9 +319,9 @@ def styled_facade_texture(rng: np.random.Generator, width_m: float, height_m: fl
         glass = rng.uniform([120, 190, 230], [180, 235, 255]) if dusk else rng.uniform([50, 50, 45], [90, 85, 80])
         img[top:] = glass
         for c in range(0, cols, max(2, int(rng.uniform(2.0, 4.0) * px_per_m))):  # mullions
-            img[top:, c:c + 2] = base * 0.6
+            img[top:, c : c + 2] = base * 0.6
         sign = np.array(rng.uniform(20, 230, 3), dtype=np.float32)
-        img[int((height_m - 3.8) * px_per_m):top] = sign
+        img[int((height_m - 3.8) * px_per_m) : top] = sign
     else:
-        img[int((height_m - 3.5) * px_per_m):] *= 0.7
+        img[int((height_m - 3.5) * px_per_m) :] *= 0.7
     return np.clip(img, 0, 255).astype(np.uint8)

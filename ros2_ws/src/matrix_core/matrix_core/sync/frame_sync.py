@@ -10,16 +10,24 @@ from dataclasses import dataclass, field
 
 @dataclass
 class FrameSyncSettings:
-    streams: list[str] = field(default_factory=list, metadata={
-        'help': 'names of the streams a complete frame needs (e.g. D1/image, D1/homography)'})
-    timeout: float = field(default=1.0, metadata={
-        'help': 'seconds to wait for missing streams after the first item of a frame arrived'})
-    stamp_tolerance: float = field(default=0.001, metadata={
-        'help': 'stamps closer than this (seconds) belong to the same frame'})
+    streams: list[str] = field(
+        default_factory=list,
+        metadata={'help': 'names of the streams a complete frame needs (e.g. D1/image, D1/homography)'},
+    )
+    timeout: float = field(
+        default=1.0, metadata={'help': 'seconds to wait for missing streams after the first item of a frame arrived'}
+    )
+    stamp_tolerance: float = field(
+        default=0.001, metadata={'help': 'stamps closer than this (seconds) belong to the same frame'}
+    )
     max_pending: int = field(default=16, metadata={'help': 'frames kept waiting at most; the oldest is emitted first'})
-    restart_gap: float = field(default=math.inf, metadata={
-        'help': 'an item this many seconds older than the last emitted frame starts a new sequence (a replay '
-                'started over) instead of being refused as late; inf: never'})
+    restart_gap: float = field(
+        default=math.inf,
+        metadata={
+            'help': 'an item this many seconds older than the last emitted frame starts a new sequence (a replay '
+            'started over) instead of being refused as late; inf: never'
+        },
+    )
 
     def __post_init__(self):
         if len(set(self.streams)) != len(self.streams):

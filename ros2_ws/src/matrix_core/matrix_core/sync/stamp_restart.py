@@ -13,10 +13,14 @@ from dataclasses import dataclass, field
 class RestartSettings:
     """Components that keep per-drone state across frames (calib, register): when the stamps go back."""
 
-    restart_gap_s: float = field(default=2.0, metadata={
-        'help': "a drone's stamps going back by more than this many seconds (a replay started over, e.g. "
-                'under use_sim_time) start that drone afresh: its first prior or reference again, no message '
-                'of the new run refused as late'})
+    restart_gap_s: float = field(
+        default=2.0,
+        metadata={
+            'help': "a drone's stamps going back by more than this many seconds (a replay started over, e.g. "
+            'under use_sim_time) start that drone afresh: its first prior or reference again, no message '
+            'of the new run refused as late'
+        },
+    )
 
     def __post_init__(self):
         if not self.restart_gap_s > 0:

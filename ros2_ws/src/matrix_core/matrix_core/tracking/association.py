@@ -5,8 +5,9 @@ import numpy as np
 from matrix_core.metrics.assignment import min_cost_matching
 
 
-def association_costs(tracks: list, dets, rows: np.ndarray, use_offsets: bool, gate_m: float,
-                      gate_growth_m: float = 0.0) -> np.ndarray:
+def association_costs(
+    tracks: list, dets, rows: np.ndarray, use_offsets: bool, gate_m: float, gate_growth_m: float = 0.0
+) -> np.ndarray:
     """(T, R) distances in metres between ``tracks`` and detections ``dets[rows]``; NaN beyond the gate,
     which is ``gate_m + gate_growth_m * misses`` for a track that missed its last ``misses`` frames.
 
@@ -25,12 +26,16 @@ def association_costs(tracks: list, dets, rows: np.ndarray, use_offsets: bool, g
     return costs
 
 
-def associate(tracks: list, dets, rows: np.ndarray, use_offsets: bool, gate_m: float,
-              gate_growth_m: float = 0.0) -> tuple:
+def associate(
+    tracks: list, dets, rows: np.ndarray, use_offsets: bool, gate_m: float, gate_growth_m: float = 0.0
+) -> tuple:
     """Hungarian matching. Returns (pairs [(track index, detection row)], unmatched track indices,
     unmatched detection rows)."""
     r, c = min_cost_matching(association_costs(tracks, dets, rows, use_offsets, gate_m, gate_growth_m))
     pairs = [(int(i), int(rows[j])) for i, j in zip(r, c)]
     used_t, used_d = set(r.tolist()), set(c.tolist())
-    return (pairs, [i for i in range(len(tracks)) if i not in used_t],
-            np.array([rows[j] for j in range(len(rows)) if j not in used_d], dtype=int))
+    return (
+        pairs,
+        [i for i in range(len(tracks)) if i not in used_t],
+        np.array([rows[j] for j in range(len(rows)) if j not in used_d], dtype=int),
+    )

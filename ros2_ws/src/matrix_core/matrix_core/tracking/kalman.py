@@ -15,11 +15,11 @@ class ConstantVelocityKalman:
     def __init__(self, dt: float, accel_noise: float, measurement_noise: float):
         self.F = np.eye(4)
         self.F[0, 2] = self.F[1, 3] = dt
-        q = np.array([[dt ** 4 / 4, dt ** 3 / 2], [dt ** 3 / 2, dt ** 2]]) * accel_noise ** 2
+        q = np.array([[dt**4 / 4, dt**3 / 2], [dt**3 / 2, dt**2]]) * accel_noise**2
         self.Q = np.zeros((4, 4))
         self.Q[np.ix_([0, 2], [0, 2])] = q
         self.Q[np.ix_([1, 3], [1, 3])] = q
-        self.R = np.eye(2) * measurement_noise ** 2
+        self.R = np.eye(2) * measurement_noise**2
         self.dt = dt
 
     def initiate(self, xy, velocity=None) -> tuple:
@@ -27,7 +27,7 @@ class ConstantVelocityKalman:
         mean = np.r_[np.asarray(xy, float), np.zeros(2) if velocity is None else np.asarray(velocity, float)]
         cov = np.diag([self.R[0, 0], self.R[1, 1], 4.0, 4.0])
         if velocity is not None:
-            cov[2:, 2:] = np.eye(2) * (2 * self.R[0, 0] / self.dt ** 2)
+            cov[2:, 2:] = np.eye(2) * (2 * self.R[0, 0] / self.dt**2)
         return mean, cov
 
     def predict(self, mean, cov) -> tuple:

@@ -10,18 +10,50 @@ class TrackerSettings:
     The defaults were chosen on validation sequences only (simulated seeds 111-114 and the real sample frames
     0-4, with the default checkpoint): ``python scripts/tune_tracker.py`` reruns that search."""
 
-    gate_m: float = field(default=1.0, metadata={'help': 'largest distance (m) between a track and a detection that may be paired'})
-    gate_growth_m: float = field(default=1.0, metadata={'help': 'the gate of a track coasting through a gap grows by this much (m) per missed frame (people turn while unseen)'})
-    high_score: float = field(default=0.5, metadata={'help': 'detections at or above this score are matched first and may start tracks'})
-    low_score: float = field(default=0.2, metadata={'help': 'detections below this score are ignored; between low and high they only extend confirmed tracks (ByteTrack second stage)'})
-    birth_hits: int = field(default=1, metadata={'help': 'consecutive matched frames before a track gets an id and is reported'})
-    max_misses: int = field(default=3, metadata={'help': 'a confirmed track is deleted after this many frames in a row without a detection'})
+    gate_m: float = field(
+        default=1.0, metadata={'help': 'largest distance (m) between a track and a detection that may be paired'}
+    )
+    gate_growth_m: float = field(
+        default=1.0,
+        metadata={
+            'help': 'the gate of a track coasting through a gap grows by this much (m) per missed frame (people turn while unseen)'
+        },
+    )
+    high_score: float = field(
+        default=0.5, metadata={'help': 'detections at or above this score are matched first and may start tracks'}
+    )
+    low_score: float = field(
+        default=0.2,
+        metadata={
+            'help': 'detections below this score are ignored; between low and high they only extend confirmed tracks (ByteTrack second stage)'
+        },
+    )
+    birth_hits: int = field(
+        default=1, metadata={'help': 'consecutive matched frames before a track gets an id and is reported'}
+    )
+    max_misses: int = field(
+        default=3, metadata={'help': 'a confirmed track is deleted after this many frames in a row without a detection'}
+    )
     frame_interval_s: float = field(default=0.5, metadata={'help': 'time between frames (s); MATRIX is 2 fps'})
     accel_noise: float = field(default=2.0, metadata={'help': 'Kalman process noise: std of the acceleration (m/s^2)'})
-    measurement_noise_m: float = field(default=0.3, metadata={'help': 'Kalman measurement noise: std of a detection position (m)'})
-    confirm_first_frame: bool = field(default=True, metadata={'help': 'tracks started in the first frame (after construction or reset()) get an id at once, as in ByteTrack: everyone present at the start would otherwise be missed for birth_hits - 1 frames'})
-    report_coasting: int = field(default=1, metadata={'help': 'also report confirmed tracks that missed up to this many frames in a row, at their Kalman prediction (0: only matched tracks)'})
-    use_offsets: bool = field(default=True, metadata={'help': 'associate with the detections\' tracking offsets (CenterTrack) when present'})
+    measurement_noise_m: float = field(
+        default=0.3, metadata={'help': 'Kalman measurement noise: std of a detection position (m)'}
+    )
+    confirm_first_frame: bool = field(
+        default=True,
+        metadata={
+            'help': 'tracks started in the first frame (after construction or reset()) get an id at once, as in ByteTrack: everyone present at the start would otherwise be missed for birth_hits - 1 frames'
+        },
+    )
+    report_coasting: int = field(
+        default=1,
+        metadata={
+            'help': 'also report confirmed tracks that missed up to this many frames in a row, at their Kalman prediction (0: only matched tracks)'
+        },
+    )
+    use_offsets: bool = field(
+        default=True, metadata={'help': 'associate with the detections\' tracking offsets (CenterTrack) when present'}
+    )
 
     def __post_init__(self):
         for name in ('gate_m', 'frame_interval_s', 'accel_noise', 'measurement_noise_m'):

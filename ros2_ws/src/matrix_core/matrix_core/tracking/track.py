@@ -46,10 +46,10 @@ class Track:
         self.mean, self.cov = mean, cov
         self.score = score
         self.track_id = None
-        self.hits = 1           # matched frames in a row
-        self.misses = 0         # unmatched frames in a row
-        self.last_xy = mean[:2].copy()   # filtered position at the last match
-        self.detection_xy = mean[:2].copy()   # position of the last matched detection
+        self.hits = 1  # matched frames in a row
+        self.misses = 0  # unmatched frames in a row
+        self.last_xy = mean[:2].copy()  # filtered position at the last match
+        self.detection_xy = mean[:2].copy()  # position of the last matched detection
 
     @property
     def confirmed(self) -> bool:

@@ -83,7 +83,7 @@ class BevTracker:
                 tr.misses += 1
                 tr.hits = 0
                 if not tr.confirmed or tr.misses > s.max_misses:
-                    continue        # tentative tracks die at their first miss
+                    continue  # tentative tracks die at their first miss
             survivors.append(tr)
         for j in left_d:
             velocity = None
@@ -96,6 +96,15 @@ class BevTracker:
             survivors.append(tr)
         self.tracks = survivors
         self._first_frame = False
-        return [TrackOutput(tr.track_id, tr.xy.copy(), tr.velocity.copy(), tr.score, tr.misses,
-                            (tr.detection_xy if tr.misses == 0 else tr.xy).copy())
-                for tr in self.tracks if tr.confirmed and (id(tr) in hit or tr.misses <= s.report_coasting)]
+        return [
+            TrackOutput(
+                tr.track_id,
+                tr.xy.copy(),
+                tr.velocity.copy(),
+                tr.score,
+                tr.misses,
+                (tr.detection_xy if tr.misses == 0 else tr.xy).copy(),
+            )
+            for tr in self.tracks
+            if tr.confirmed and (id(tr) in hit or tr.misses <= s.report_coasting)
+        ]
