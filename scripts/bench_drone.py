@@ -86,11 +86,13 @@ def bench(
     calib_ms, register_ms, first = np.array(calib_ms), np.array(register_ms), np.array(first)
     both = calib_ms + register_ms
     keeps_up = both.mean() <= 1000 * PERIOD_S
+    ref_camera = dataset.reference_camera(dataset.views[0])
     print(
         f'{root}: {len(dataset.views)} drones x {len(dataset.frames)} frames, '
-        f'{dataset.reference_camera(dataset.views[0]).width}x{dataset.reference_camera(dataset.views[0]).height}, CPU time\n'
+        f'{ref_camera.width}x{ref_camera.height}, CPU time\n'
         f'  calib     {_figures(calib_ms)} (ok {ok}, of them tracked {tracked}, of {len(both)}; vs the stored '
-        f'calibration: rotation median {np.median(rot or [np.nan]):.3f} / max {max(rot, default=np.nan):.3f} deg, centre median '
+        f'calibration: rotation median {np.median(rot or [np.nan]):.3f} / max {max(rot, default=np.nan):.3f} deg, '
+        'centre median '
         f'{100 * np.median(centre or [np.nan]):.1f} / max {100 * max(centre, default=np.nan):.1f} cm)\n'
         f'  register  {_figures(register_ms)} (mode {register_settings.mode}: registered {registered} of '
         f'{len(both)}, of them by flow {flow_frames}, anchors by flow {flow_anchors})\n'

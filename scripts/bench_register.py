@@ -260,7 +260,8 @@ def main(argv=None) -> int:
                 break
             row = table[-1]
             print(
-                f"{row['backend']:22s} {row['size']:>9s} feat {row['features']:5d} pairs {row['pairs']:2d} failed {row['failed']:2d}  "
+                f"{row['backend']:22s} {row['size']:>9s} feat {row['features']:5d} pairs {row['pairs']:2d} "
+                f"failed {row['failed']:2d}  "
                 f"time {row['ms_median']:7.0f} ms (max {row['ms_max']:6.0f})  matches {row['matches']:5.0f}  "
                 f"inliers {row['inliers']:5.0f}  c {row['confidence']:.2f}  error median {row['err_median_px']:.2f} px "
                 f"max {row['err_max_px']:.2f} px  CPU median {row['cpu_ms_median']:.0f} ms p95 {row['cpu_ms_p95']:.0f} "

@@ -153,7 +153,8 @@ def main() -> int:
     samples = []  # (frames with tracks, wall s, {label: RSS MiB})
     t0 = time.monotonic()
     print(
-        f'soak: {facts.frames} frames x {len(settings.views)} drones ({args.width}x{args.height}), {len(specs)} processes, logs {run / "logs"}',
+        f'soak: {facts.frames} frames x {len(settings.views)} drones ({args.width}x{args.height}), '
+        f'{len(specs)} processes, logs {run / "logs"}',
         flush=True,
     )
     try:

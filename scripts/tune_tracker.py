@@ -6,9 +6,10 @@ Validation sequences (never the test seeds 2xx; ``bash scripts/detector_data.sh 
   data/det_complex_val_s111, data/det_modified_val_s112     the recipe's validation seeds (30 frames)
   data/det_complex_trackval_s113, data/det_modified_trackval_s114   longer ones (60 frames) for identities
   ../shared/matrix_sample frames 0-4 (ground-truth calibration)     real validation frames
-Search: coordinate descent from the current defaults (``TrackerSettings``, or those changed by ``--set``), one parameter at a time over the
-candidates below, two rounds, keeping a change only if it raises the objective by ``--min_gain`` points: the
-objective is the mean over the sequences of (IDF1 + MOTA) / 2. Prints every trial, then the defaults against the best per sequence; writes
+Search: coordinate descent from the current defaults (``TrackerSettings``, or those changed by ``--set``), one
+parameter at a time over the candidates below, two rounds, keeping a change only if it raises the objective by
+``--min_gain`` points: the objective is the mean over the sequences of (IDF1 + MOTA) / 2. Prints every trial,
+then the defaults against the best per sequence; writes
 ``OUT/trials.json`` and ``OUT/tune_tracker.png`` (objective per candidate value of each parameter).
 
     python scripts/tune_tracker.py [--checkpoint PATH] [--out out/tune_tracker]

@@ -10,7 +10,7 @@ from matrix_core.evaluation.graph_report import (
     score_view_frame,
     summary_table,
 )
-from matrix_core.geometry.camera import Camera, pose_matrix
+from matrix_core.geometry.camera import Camera
 
 
 @pytest.fixture(scope='module')

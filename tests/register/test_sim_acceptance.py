@@ -75,7 +75,8 @@ def test_registration_that_tracks_meets_the_acceptance(variant, tmp_path):
     run = acceptance_run(MatrixDataset(out), RegisterSettings(mode='track'), views=VIEWS[variant])
     figures = (
         f"{variant} track: {run['pairs'] - len(run['failed'])}/{run['pairs']} registered, "
-        f"{run['tracked']} by flow, {run['anchors_by_flow']} anchored by flow, error median {run['error_px_median']:.2f} / max "
+        f"{run['tracked']} by flow, {run['anchors_by_flow']} anchored by flow, "
+        f"error median {run['error_px_median']:.2f} / max "
         f"{run['error_px_max']:.2f} full-res-equivalent px"
     )
     print(figures)

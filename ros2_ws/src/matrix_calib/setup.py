@@ -18,7 +18,10 @@ setup(
     zip_safe=True,
     maintainer='matrix-tracker developers',
     maintainer_email='dev@matrix-tracker.invalid',
-    description="Per-drone camera calibration from ground checkerboards, every frame (PnP): publishes CameraInfo, pose and diagnostics.",
+    description=(
+        'Per-drone camera calibration from ground checkerboards, every frame (PnP): '
+        'publishes CameraInfo, pose and diagnostics.'
+    ),
     license='Apache-2.0',
     # Node executables are added here by the issue that implements each node.
     entry_points={'console_scripts': ['calib = matrix_calib.calib_node:main']},

@@ -18,7 +18,10 @@ setup(
     zip_safe=True,
     maintainer='matrix-tracker developers',
     maintainer_email='dev@matrix-tracker.invalid',
-    description="Registration of each drone's image to its reference view (local features, RANSAC homography): publishes homographies.",
+    description=(
+        "Registration of each drone's image to its reference view (local features, RANSAC homography): "
+        'publishes homographies.'
+    ),
     license='Apache-2.0',
     # Node executables are added here by the issue that implements each node.
     entry_points={'console_scripts': ['register = matrix_register.register_node:main']},

@@ -67,7 +67,8 @@ class FuseNode(Node):
         self.create_timer(0.05, self._poll, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(
             f'fusing {len(s.views)} views ({s.image_kind} images, {s.input_kind}) with {s.checkpoint_path()} (warm-up '
-            f'{warm_up_s:.2f} s); grid {self.fuser.grid.shape} cells of {self.fuser.grid.cell} m; tracks on {s.tracks_topic}'
+            f'{warm_up_s:.2f} s); grid {self.fuser.grid.shape} cells of {self.fuser.grid.cell} m; '
+            f'tracks on {s.tracks_topic}'
         )
 
     def _subscribe_view(self, view: str) -> SubscribeWhenConnected:

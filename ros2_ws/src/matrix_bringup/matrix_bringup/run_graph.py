@@ -2,7 +2,8 @@
 
 For environments without ``ros2 launch`` (``make setup`` builds one here; ``make demo`` uses it when it
 exists): ``run_graph`` starts exactly the processes that ``full_graph.launch.py`` starts (the same
-:class:`GraphSettings`, the same :func:`graph_nodes`), each found the way ``ros2 run`` finds it (``<prefix>/lib/<package>/<executable>`` of its ament prefix) and
+:class:`GraphSettings`, the same :func:`graph_nodes`), each found the way ``ros2 run`` finds it
+(``<prefix>/lib/<package>/<executable>`` of its ament prefix) and
 logging to ``LOG_DIR/<label>.log``. It waits until the player has played the whole bag (and the monitor,
 if any, has written its scores), then stops every node (SIGTERM, SIGKILL after ``stop_timeout`` s); the
 nodes also get SIGTERM if ``run_graph`` itself dies, so no process is left behind.

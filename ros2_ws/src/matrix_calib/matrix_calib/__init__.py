@@ -1,1 +1,3 @@
-"""Per-drone camera calibration from ground checkerboards, every frame (PnP): publishes CameraInfo, pose and diagnostics."""
+"""Per-drone camera calibration from ground checkerboards, every frame (PnP).
+
+Publishes CameraInfo, pose and diagnostics."""

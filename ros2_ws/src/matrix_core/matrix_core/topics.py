@@ -4,7 +4,8 @@ Per-drone streams are RELATIVE names under the drone, ``<view>/<stream>`` (e.g. 
 in the root namespace resolves them to ``/D3/image_raw``, one started in a namespace (``--ros-args -r
 __ns:=/fleet``) to ``/fleet/D3/image_raw``, and each is remappable (``-r D3/image_raw:=/cam3/image``) as ROS
 users expect. A node started in a drone's namespace (``/D3``, as ``run_graph`` starts one process per drone)
-uses the bare stream names (``image_raw``) for that drone (``matrix_ros.node_settings.hosted_drones``). Bags store the absolute names of a root-namespace graph (:func:`absolute`).
+uses the bare stream names (``image_raw``) for that drone (``matrix_ros.node_settings.hosted_drones``).
+Bags store the absolute names of a root-namespace graph (:func:`absolute`).
 Graph-wide outputs (``tracks``, ``detections``, ...) are relative too; ``/diagnostics`` is absolute by ROS
 convention.
 """
@@ -43,6 +44,38 @@ HEADER_TYPE = 'std_msgs/msg/Header'
 HOMOGRAPHY_TYPE = 'matrix_msgs/msg/HomographyStamped'
 TRACK_ARRAY_TYPE = 'matrix_msgs/msg/TrackArray'
 DETECTION_2D_ARRAY_TYPE = 'matrix_msgs/msg/Detection2DArray'
+MARKER_ARRAY_TYPE = 'visualization_msgs/msg/MarkerArray'
+OCCUPANCY_GRID_TYPE = 'nav_msgs/msg/OccupancyGrid'
+DIAGNOSTIC_ARRAY_TYPE = 'diagnostic_msgs/msg/DiagnosticArray'
+
+FRAME_DONE_TOPIC = '/graph_monitor/frame_done'  # graph_monitor: the stamp of each frame every stage finished
+
+# The message type of every stream: per drone, graph-wide (relative names) and absolute.
+DRONE_STREAM_TYPES = {
+    IMAGE_RAW: IMAGE_TYPE,
+    IMAGE_COMPRESSED: COMPRESSED_TYPE,
+    LINK_IMAGE_COMPRESSED: COMPRESSED_TYPE,
+    LINK_DROPPED: HEADER_TYPE,
+    CAMERA_INFO: CAMERA_INFO_TYPE,
+    POSE: POSE_TYPE,
+    HOMOGRAPHY: HOMOGRAPHY_TYPE,
+    GROUND_TRUTH_CAMERA_INFO: CAMERA_INFO_TYPE,
+    DETECTIONS_2D: DETECTION_2D_ARRAY_TYPE,
+    OVERLAY_COMPRESSED: COMPRESSED_TYPE,
+    GROUND_TRUTH_POSE: POSE_TYPE,
+}
+GRAPH_STREAM_TYPES = {
+    TRACKS: TRACK_ARRAY_TYPE,
+    DETECTIONS: TRACK_ARRAY_TYPE,
+    MARKERS: MARKER_ARRAY_TYPE,
+    BEV_HEATMAP: OCCUPANCY_GRID_TYPE,
+}
+ABSOLUTE_TOPIC_TYPES = {
+    DIAGNOSTICS_TOPIC: DIAGNOSTIC_ARRAY_TYPE,
+    PEDESTRIANS_TOPIC: POSE_ARRAY_TYPE,
+    PEDESTRIAN_IDS_TOPIC: IDS_TYPE,
+    FRAME_DONE_TOPIC: HEADER_TYPE,
+}
 
 
 def drone_topic(view: str, stream: str) -> str:
@@ -54,6 +87,25 @@ def drone_topic(view: str, stream: str) -> str:
 def absolute(view: str, stream: str) -> str:
     """The name a root-namespace graph (and a bag) uses: ('D3', 'image_raw') -> '/D3/image_raw'."""
     return '/' + drone_topic(view, stream)
+
+
+def graph_topic(stream: str) -> str:
+    """The name a root-namespace graph uses for a graph-wide stream: 'tracks' -> '/tracks'."""
+    return '/' + stream
+
+
+def topic_type(topic: str) -> str:
+    """The message type of a topic of a root-namespace graph: '/D3/homography' -> HOMOGRAPHY_TYPE,
+    '/tracks' -> TRACK_ARRAY_TYPE, '/diagnostics' -> DIAGNOSTIC_ARRAY_TYPE. KeyError for a name that is none of
+    the streams above (``/<view>/<drone stream>``, ``/<graph stream>`` or an absolute topic)."""
+    if topic in ABSOLUTE_TOPIC_TYPES:
+        return ABSOLUTE_TOPIC_TYPES[topic]
+    view, _, stream = topic.removeprefix('/').partition('/')
+    if topic.startswith('/') and view and stream in DRONE_STREAM_TYPES:
+        return DRONE_STREAM_TYPES[stream]
+    if topic.startswith('/') and not stream and view in GRAPH_STREAM_TYPES:
+        return GRAPH_STREAM_TYPES[view]
+    raise KeyError(f'{topic!r} is not a topic of matrix_core.topics')
 
 
 def image_stream(compressed: bool) -> str:

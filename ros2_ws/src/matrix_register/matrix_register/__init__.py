@@ -1,1 +1,3 @@
-"""Registration of each drone's image to its reference view (local features, RANSAC homography): publishes homographies."""
+"""Registration of each drone's image to its reference view (local features, RANSAC homography).
+
+Publishes homographies."""

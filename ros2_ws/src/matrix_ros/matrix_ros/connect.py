@@ -19,11 +19,11 @@ starts only once the subscriptions have been there for ``SETTLE_S`` (:class:`Sub
 
 from typing import Callable
 
+from rclpy.clock import Clock, ClockType
+
 # Seconds every awaited subscription must stay matched before a player starts: time for the subscriber to
 # match the player's writer too (both directions of discovery usually complete within milliseconds here).
 SETTLE_S = 1.0
-
-from rclpy.clock import Clock, ClockType
 
 
 class SubscribeWhenConnected:

@@ -4,7 +4,8 @@ Every topic in ``topics`` (with its type at the same index of ``types``) is stor
 (serialized CDR, no re-encoding), with the node's clock as bag time (the bag's time under
 ``use_sim_time``). Subscriptions use QoS ``qos``: ``history`` (default) also gets the last messages
 published before the recorder matched (this workspace's publishers offer them), so a recorder that joins
-a moment late loses nothing; a volatile publisher needs ``qos:=reliable``. With ``tracks_topic`` set, each ``matrix_msgs/TrackArray`` also becomes lines
+a moment late loses nothing; a volatile publisher needs ``qos:=reliable``. With ``tracks_topic`` set, each
+``matrix_msgs/TrackArray`` also becomes lines
 ``frame id x y`` in ``mot_file`` (frame = round((stamp - start_time) / frame_period); metres, world
 frame), the format ``matrix-tracker score`` reads. The sequence clock (``start_time``, ``frame_period``) is the
 one stored in ``sequence_bag`` (the bag being replayed; see ``matrix_core.bags.clock``), else the default

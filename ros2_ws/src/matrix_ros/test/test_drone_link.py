@@ -103,7 +103,7 @@ def test_the_limit_of_waiting_images_is_per_drone(node):
     assert own.waiting() == MAX_WAITING_IMAGES * len(views)  # none dropped
     link.image('D3', _image(99.0), object())
     assert own.waiting() == MAX_WAITING_IMAGES * len(views)  # D3's oldest made room for its newest
-    thread = _drain(node, own)
+    _drain(node, own)
     made = sorted(c[1] for c in calls)
     assert len(made) == MAX_WAITING_IMAGES * len(views) and made.count(0.0) == len(views) - 1 and 99.0 in made
 

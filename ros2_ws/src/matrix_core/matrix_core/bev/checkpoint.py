@@ -37,7 +37,8 @@ def load_model(path, settings_overrides: dict = None) -> tuple:
 
 def export_checkpoint(src, dst, trained_with: str = '') -> Path:
     """Write the shippable part of a training checkpoint (``model``, ``settings``, ``epoch``, ``history``,
-    ``trained_with``, and ``averaged`` when it has one: no optimizer state, a third of the size) from ``src`` (e.g. ``last.pt``) to ``dst``."""
+    ``trained_with``, and ``averaged`` when it has one: no optimizer state, a third of the size) from ``src``
+    (e.g. ``last.pt``) to ``dst``."""
     ckpt = load_checkpoint(src)
     dst = Path(dst)
     dst.parent.mkdir(parents=True, exist_ok=True)

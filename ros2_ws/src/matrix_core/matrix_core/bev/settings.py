@@ -26,7 +26,8 @@ class BevSettings:
     subcell: str = field(
         default='heatmap',
         metadata={
-            'help': "sub-cell position of a peak: 'heatmap' (3x3 score centroid, the most precise measured), 'offset' (offset head) or 'none' (cell centre)"
+            'help': "sub-cell position of a peak: 'heatmap' (3x3 score centroid, the most precise measured), "
+            "'offset' (offset head) or 'none' (cell centre)"
         },
     )
     temporal: bool = field(default=True, metadata={'help': 'fuse the previous frame\'s BEV features'})

@@ -135,7 +135,8 @@ def validation_record(specs: list, results: list) -> dict:
 
 def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: bool = True, log=print) -> list:
     """Train; returns the history (one dict per epoch). Writes ``last.pt`` every epoch, ``best.pt`` at the
-    best ``val_score`` (validation MODA weighted per sequence, :func:`validation_record`), ``history.json``; ``resume`` continues from ``last.pt`` (same config)."""
+    best ``val_score`` (validation MODA weighted per sequence, :func:`validation_record`), ``history.json``;
+    ``resume`` continues from ``last.pt`` (same config)."""
     from tqdm import tqdm
 
     out_dir = Path(out_dir or config.out_dir)

@@ -7,8 +7,9 @@ Status of each result:
     - ``failed``: no good pose yet (since the start); ``camera`` is None, nothing to publish.
 
 Where the boards are predicted from, first match wins:
-    1. the frame's registration (a :class:`~matrix_core.register.registration.Registration`), when it implies a rigid camera (:mod:`.guided`): its
-       corners are tracked (``track_registered``, :mod:`.corner_tracking`), else searched near it;
+    1. the frame's registration (a :class:`~matrix_core.register.registration.Registration`), when it implies
+       a rigid camera (:mod:`.guided`): its corners are tracked (``track_registered``, :mod:`.corner_tracking`),
+       else searched near it;
     2. the prior pose (last good frame, or the initial prior) carried into this image by the image motion
        (:class:`~matrix_core.calib.motion.PriorImageMotion`): opt-in ``track_corners`` tracks the corners
        (after a good frame whose homography with the faster ``track_matcher`` succeeded, at most

@@ -3,10 +3,10 @@ MATRIX folder, print one table of all metrics, write PNGs (heatmap vs ground tru
 the detections/tracks as text (``frame x y score`` / ``frame id x y``).
 
 Image plane: each frame's tracks become boxes in every drone (``fusion.image_boxes``: the person cylinder
-at the track's detection of the frame, projected with the camera the calibration source's homography implies with the drone's reference
-intrinsics, as the live fuse node does), scored against the annotated boxes at IoU >= ``--iou`` per drone
-and overall (``metrics.image_boxes``); written as ``boxes_2d.txt`` (``frame,id,x,y,w,h,score,drone``) and
-drawn for one frame in ``boxes_2d_FRAME.png``.
+at the track's detection of the frame, projected with the camera the calibration source's homography implies
+with the drone's reference intrinsics, as the live fuse node does), scored against the annotated boxes at
+IoU >= ``--iou`` per drone and overall (``metrics.image_boxes``); written as ``boxes_2d.txt``
+(``frame,id,x,y,w,h,score,drone``) and drawn for one frame in ``boxes_2d_FRAME.png``.
 
 No frame ends the run: a view whose image or calibration cannot be used in a frame (unreadable, corrupt or
 wrong-size image, missing or malformed calibration, NaN or singular homography or registration record) is

@@ -4,9 +4,10 @@ REC is the ``recorder``'s bag folder (matrix_msgs/TrackArray tracks and detectio
 /detections of the ``fuse`` node; its /bev_heatmap too, if recorded, fixes the grid) or its MOT text
 (``frame id x y``). SEQUENCE_BAG is the bag that was replayed (``/ground_truth/pedestrians``). Frames are
 ``round((stamp - start) / period)`` with the sequence clock stored in SEQUENCE_BAG (``--start-time`` and
-``--frame-period`` override it; bags written before the clock was stored get 1.0 s and 0.5 s). Detection metrics are of the detections when recorded (else of the
-tracks); tracking metrics of the tracks. Prints the table of ``evaluate`` and lists frames without tracks;
-``--png`` draws the recorded tracks beside the ground-truth trajectories.
+``--frame-period`` override it; bags written before the clock was stored get 1.0 s and 0.5 s). Detection
+metrics are of the detections when recorded (else of the tracks); tracking metrics of the tracks. Prints the
+table of ``evaluate`` and lists frames without tracks; ``--png`` draws the recorded tracks beside the
+ground-truth trajectories.
 
 Image plane, with ``--dataset`` (the MATRIX folder the sequence bag was made from; bag frame ``i`` is its
 ``i``-th frame): the recorded ``/Dn/detections_2d`` against the annotated boxes at IoU >= ``--iou``, per drone

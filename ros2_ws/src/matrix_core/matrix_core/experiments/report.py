@@ -505,25 +505,27 @@ class Report:
             '## How our setup differs from the paper (read before comparing numbers)',
             '\n'.join(
                 [
-                    '- **Data**: our own seeded simulator (flat-shaded rasteriser, articulated people, social-force crowd) '
-                    'instead of Unreal Engine + AirSim. Scenes have the paper\'s layout (variants, 8 drones on a ring, PID '
-                    'gimbal, moving cameras) but far simpler appearance; absolute numbers are therefore not comparable, only '
-                    'the direction and rough size of effects (static vs per-frame geometry, transfer, dropout).',
+                    '- **Data**: our own seeded simulator (flat-shaded rasteriser, articulated people, social-force '
+                    'crowd) instead of Unreal Engine + AirSim. Scenes have the paper\'s layout (variants, 8 drones on '
+                    'a ring, PID gimbal, moving cameras) but far simpler appearance; absolute numbers are therefore '
+                    'not comparable, only the direction and rough size of effects (static vs per-frame geometry, '
+                    'transfer, dropout).',
                     f'- **Resolution**: {"640x360" if self.size["sim_fast"] else "1920x1080"} renders, network input '
-                    f'{self.size["image_width"]}x{self.size["image_height"]} and {self.size["cell_m"]} m BEV cells, against '
-                    '1920x1080 images and a finer grid in the paper.',
+                    f'{self.size["image_width"]}x{self.size["image_height"]} and {self.size["cell_m"]} m BEV cells, '
+                    'against 1920x1080 images and a finer grid in the paper.',
                     f'- **Training length**: {self.size["train_frames"]} training frames per variant and '
-                    f'{self.size["epochs"]} epochs of a small CNN trained from scratch on CPU (no pretrained weights can be '
-                    f'downloaded here), against {paper.EPOCHS} epochs of larger networks on GPUs in the paper. Short training '
-                    'mostly lowers detection quality across the board; comparisons between rows of one table (same recipe) '
-                    'are the meaningful part.',
+                    f'{self.size["epochs"]} epochs of a small CNN trained from scratch on CPU (no pretrained weights '
+                    f'can be downloaded here), against {paper.EPOCHS} epochs of larger networks on GPUs in the paper. '
+                    'Short training mostly lowers detection quality across the board; comparisons between rows of one '
+                    'table (same recipe) are the meaningful part.',
                     '- **Static baselines**: we do not run EarlyBird or TrackTacular themselves; the static-camera '
-                    'assumption is emulated by feeding our network a frozen calibration (at test time, or in training and '
-                    'test). The paper\'s EarlyBird/TrackTacular rows are other networks.',
-                    f'- **Sequence length and seeds**: test sequences of {self.size["test_frames"]} frames (one sequence '
-                    f'per variant), {len(self.size.get("ransac_seeds", []))} RANSAC seeds and {len(self.size["seeds"])} '
-                    f'training seeds, {len(self.size["dropout_seeds"])} random view subsets per drop rate; with so few frames '
-                    'and people a single sequence moves MODA/MOTA by several points, so small differences are noise.',
+                    'assumption is emulated by feeding our network a frozen calibration (at test time, or in training '
+                    'and test). The paper\'s EarlyBird/TrackTacular rows are other networks.',
+                    f'- **Sequence length and seeds**: test sequences of {self.size["test_frames"]} frames (one '
+                    f'sequence per variant), {len(self.size.get("ransac_seeds", []))} RANSAC seeds and '
+                    f'{len(self.size["seeds"])} training seeds, {len(self.size["dropout_seeds"])} random view subsets '
+                    'per drop rate; with so few frames and people a single sequence moves MODA/MOTA by several points, '
+                    'so small differences are noise.',
                     '- **Estimated geometry**: `pnp` and `registration` run on our simulated images, whose boards and '
                     'textures are cleaner than Unreal Engine renders.',
                     f'- **Paper numbers**: {paper.SOURCE} (`matrix_core/experiments/paper.py`, checked by a test).',

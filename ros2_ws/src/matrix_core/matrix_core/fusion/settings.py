@@ -81,8 +81,8 @@ class FuseSettings(TrackerSettings):
     checkpoint: str = field(
         default='',
         metadata={
-            'help': 'BEV model checkpoint (.pt): a path or the name of one shipped in matrix_core/bev/checkpoints (e.g. '
-            'detector_tiny_seed0.pt, the faster detector); empty: the shipped default detector_seed1.pt'
+            'help': 'BEV model checkpoint (.pt): a path or the name of one shipped in matrix_core/bev/checkpoints '
+            '(e.g. detector_tiny_seed0.pt, the faster detector); empty: the shipped default detector_seed1.pt'
         },
     )
     device: str = field(default='cpu', metadata={'help': 'torch device (the BEV runner decodes on the CPU)'})

@@ -251,7 +251,7 @@ class Registrar:
         reference pose). After ``FLOW_ANCHOR_TRIES`` failed tries in a row, the next is made only when an
         anchor is ``due`` on a sound chain (a reference filmed at another time may never hold, as on the real
         sample; each failed try costs a flow step)."""
-        s, state, reference = self.settings, self._track, self._reference_track
+        state, reference = self._track, self._reference_track
         if reference is None or self.key is not None or (self._flow_anchor_failures >= FLOW_ANCHOR_TRIES and not due):
             return None, ''
         result, why_not = self._flow_to_reference(images, frame_id, start, state, reference)

@@ -114,7 +114,8 @@ class RegisterSettings:
     rekey_after: int = field(
         default=3,
         metadata={
-            'help': 're-key to the last well-registered frame after this many weak or failed frames in a row (0 = never)'
+            'help': 're-key to the last well-registered frame after this many weak or failed frames in a row '
+            '(0 = never)'
         },
     )
     retry_reference_every: int = field(

@@ -16,7 +16,8 @@ class TrackerSettings:
     gate_growth_m: float = field(
         default=1.0,
         metadata={
-            'help': 'the gate of a track coasting through a gap grows by this much (m) per missed frame (people turn while unseen)'
+            'help': 'the gate of a track coasting through a gap grows by this much (m) per missed frame '
+            '(people turn while unseen)'
         },
     )
     high_score: float = field(
@@ -25,7 +26,8 @@ class TrackerSettings:
     low_score: float = field(
         default=0.2,
         metadata={
-            'help': 'detections below this score are ignored; between low and high they only extend confirmed tracks (ByteTrack second stage)'
+            'help': 'detections below this score are ignored; between low and high they only extend confirmed '
+            'tracks (ByteTrack second stage)'
         },
     )
     birth_hits: int = field(
@@ -42,13 +44,15 @@ class TrackerSettings:
     confirm_first_frame: bool = field(
         default=True,
         metadata={
-            'help': 'tracks started in the first frame (after construction or reset()) get an id at once, as in ByteTrack: everyone present at the start would otherwise be missed for birth_hits - 1 frames'
+            'help': 'tracks started in the first frame (after construction or reset()) get an id at once, as in '
+            'ByteTrack: everyone present at the start would otherwise be missed for birth_hits - 1 frames'
         },
     )
     report_coasting: int = field(
         default=1,
         metadata={
-            'help': 'also report confirmed tracks that missed up to this many frames in a row, at their Kalman prediction (0: only matched tracks)'
+            'help': 'also report confirmed tracks that missed up to this many frames in a row, at their Kalman '
+            'prediction (0: only matched tracks)'
         },
     )
     use_offsets: bool = field(
