@@ -57,4 +57,4 @@ experiments-quick: setup
 	$(IN_ENV) matrix-tracker experiments --mode quick --out out/experiments --report $(RESULTS)
 
 clean:
-	rm -rf ros2_ws/build ros2_ws/install ros2_ws/log ros2_ws/cli_overlay out .pytest_cache
+	rm -rf ros2_ws/build ros2_ws/install ros2_ws/log ros2_ws/cli_overlay ros2_ws/interfaces_overlay out .pytest_cache

@@ -9,6 +9,11 @@ if [ -f "$_root/ros2_ws/cli_overlay/install/local_setup.sh" ] && ! command -v ro
   set +u
   COLCON_CURRENT_PREFIX="$_root/ros2_ws/cli_overlay/install" . "$_root/ros2_ws/cli_overlay/install/local_setup.sh"
 fi
+# vision_msgs and tf2_msgs built by scripts/build_interfaces.sh where no installed ROS 2 has them.
+if [ -f "$_root/ros2_ws/interfaces_overlay/install/local_setup.sh" ]; then
+  set +u
+  COLCON_CURRENT_PREFIX="$_root/ros2_ws/interfaces_overlay/install" . "$_root/ros2_ws/interfaces_overlay/install/local_setup.sh"
+fi
 if [ -f "$_root/ros2_ws/install/setup.sh" ]; then
   set +u
   COLCON_CURRENT_PREFIX="$_root/ros2_ws/install" . "$_root/ros2_ws/install/setup.sh"
