@@ -8,8 +8,12 @@ setup(
     name=package_name,
     version='0.1.0',
     packages=find_packages(exclude=['test']),
-    # Scene variants of the simulator, BEV training configs and the shipped BEV checkpoint.
-    package_data={'matrix_core.sim': ['configs/*.yaml'], 'matrix_core.bev': ['configs/*.yaml', 'checkpoints/*.pt']},
+    # Scene variants of the simulator, BEV training configs, the shipped BEV checkpoint and site files.
+    package_data={
+        'matrix_core.sim': ['configs/*.yaml'],
+        'matrix_core.bev': ['configs/*.yaml', 'checkpoints/*.pt'],
+        'matrix_core.site': ['sites/*.yaml'],
+    },
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),

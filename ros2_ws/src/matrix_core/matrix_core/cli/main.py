@@ -21,6 +21,7 @@ SUBCOMMANDS = (
     'simulate',
     'evaluate-recording',
     'experiments',
+    'site',
 )
 
 

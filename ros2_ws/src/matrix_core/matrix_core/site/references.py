@@ -1,0 +1,105 @@
+"""A site's reference images and calibrations on disk: where they are, which exist, and reading them.
+
+A site file names each drone's reference relative to ``references.root`` (itself relative to the site file's
+folder, and may contain ``${NAME}`` environment variables: the shipped MATRIX site uses
+``${MATRIX_SHARED}/matrix_sample``). Loading a site never reads these files; a command that needs them calls
+:func:`require_references` first, so that it stops before it starts, naming the drone and the file.
+"""
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from matrix_core.geometry.camera import Camera
+from matrix_core.site.load import SiteError, expand_variables
+from matrix_core.site.schema import CalibrationFormat, DroneSpec, ReferenceSource, Site
+
+
+def reference_root(site: Site) -> Path:
+    """The folder the drones' reference paths are relative to; SiteError naming an unset variable."""
+    if site.references_root is None:
+        _, missing = expand_variables(site.references_root_text)
+        raise SiteError(
+            f'{site.path}: references.root: {site.references_root_text!r} names the environment variable '
+            f'{missing}, which is not set'
+        )
+    return site.references_root
+
+
+def resolve(site: Site, path: Path) -> Path:
+    """A reference path of the site file (relative to ``references.root``, or absolute) as an absolute path."""
+    return (reference_root(site) / path).resolve()
+
+
+@dataclass(frozen=True)
+class ReferenceFiles:
+    """One drone's reference files and which of them are missing (absolute paths)."""
+
+    drone: str
+    image: Path
+    calibration: tuple
+    missing: tuple
+
+    @property
+    def found(self) -> bool:
+        return not self.missing
+
+
+def reference_files(site: Site) -> list:
+    """:class:`ReferenceFiles` of every drone (empty when the references are to be simulated)."""
+    if site.references is ReferenceSource.SIMULATE:
+        return []
+    out = []
+    for d in site.drones:
+        image = resolve(site, d.reference.image)
+        calibration = tuple(resolve(site, p) for p in d.reference.calibration.files)
+        missing = tuple(p for p in (image, *calibration) if not p.is_file())
+        out.append(ReferenceFiles(d.name, image, calibration, missing))
+    return out
+
+
+def reference_camera(site: Site, drone: DroneSpec) -> Camera:
+    """The calibration of ``drone``'s reference image, in the internal conventions; SiteError when unreadable."""
+    from matrix_core.datasets import matrix_conventions as conv
+    from matrix_core.datasets.opencv_xml import read_matrices
+    from matrix_core.datasets.types import DatasetError
+
+    if drone.reference is None:
+        raise SiteError(f'{site.path}: drone {drone.name} has no reference (references.source is simulate)')
+    cal = drone.reference.calibration
+    if cal.format is not CalibrationFormat.MATRIX_XML:  # the one format so far; a new one is read here
+        raise SiteError(f'{site.path}: drone {drone.name}: cannot read calibration format {cal.format.value}')
+    try:
+        intr = read_matrices(resolve(site, cal.intrinsic), ['camera_matrix', 'distortion_coefficients'])
+        extr = read_matrices(resolve(site, cal.extrinsic), ['rvec', 'tvec'])
+        return conv.camera_from_file(
+            intr['camera_matrix'], intr['distortion_coefficients'], extr['rvec'], extr['tvec'], *drone.camera.image_size
+        )
+    except (DatasetError, ValueError) as exc:
+        raise SiteError(f'{site.path}: drones ({drone.name}).reference.calibration: {exc}') from None
+
+
+def require_references(site: Site) -> None:
+    """Check that every drone's reference image and calibration exist and that each image has the drone's
+    ``camera.image_size``: SiteError naming the first fault (the drone, the key and the file), else nothing."""
+    from matrix_core.datasets.base import image_size
+    from matrix_core.datasets.types import DatasetError
+
+    if site.references is ReferenceSource.SIMULATE:
+        raise SiteError(
+            f'{site.path}: references.source: simulate: this site has no reference images or calibrations yet, '
+            f'and this command needs them'
+        )
+    for files in reference_files(site):
+        if files.missing:
+            raise SiteError(f'{site.path}: drones ({files.drone}).reference: no such file {files.missing[0]}')
+        drone = site.drone(files.drone)
+        try:
+            size = tuple(image_size(files.image))
+        except DatasetError as exc:
+            raise SiteError(f'{site.path}: drones ({drone.name}).reference.image: {exc}') from None
+        if size != drone.camera.image_size:
+            raise SiteError(
+                f'{site.path}: drones ({drone.name}).reference.image: {files.image} is {size[0]}x{size[1]}, '
+                f'camera.image_size is {drone.camera.image_size[0]}x{drone.camera.image_size[1]}'
+            )
+        reference_camera(site, drone)
