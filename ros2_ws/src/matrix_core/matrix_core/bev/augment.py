@@ -5,7 +5,7 @@ Every function takes a (h, w, 3) uint8 RGB image at the network input size (what
 scale-and-crop moves pixels by a 3x3 affine ``aug_H_input`` (input pixels -> augmented pixels, pixel-centre
 convention as everywhere, see ``geometry/homography.py``), which :func:`augment_feat_H_grid` folds into the
 view's ``feat_H_grid`` so that a ground point still lifts from the pixel it now appears at. The sim-to-real
-gap (issue #15) is what these target: camera colour/exposure, lens softness, sensor noise, compression and
+gap is what these target: camera colour/exposure, lens softness, sensor noise, compression and
 drone altitude/framing differ between the simulator and the real MATRIX frames.
 """
 

@@ -37,7 +37,7 @@ TRACK_VERIFY_SHIFT = 2
 # the saddles' noise (0.03-0.08 deg): at 0.03 / 0.015 m 9 of 40 real tracked frames ran all rounds; at 0.05 / 0.025
 # the real sample's calib took 19-20 instead of 30-33 ms per frame, rotation error median 0.014 instead of 0.013 deg,
 # max 0.109 both (simulated complex, 8 x 40 frames: 22 / 25 instead of 25 / 29 ms median / mean, 0.008 / 0.203
-# instead of 0.007 / 0.206 deg; scripts/bench_drone.py, stop 41).
+# instead of 0.007 / 0.206 deg; scripts/bench_drone.py).
 SETTLED_DEG, SETTLED_M = 0.05, 0.025
 MAX_MOVE_SQUARES = 0.15  # a refined corner further than this from where a solved pose predicts it is no saddle
 PREFILTER_CONTRAST = 0.5  # of min_contrast: what a saddle shows at its prediction to be refined at all
