@@ -1,4 +1,4 @@
-"""The paper table in code matches issue #16's list of the MATRIX paper's figures, value by value
+"""The paper table in code matches the MATRIX paper's figures, value by value
 (written out here independently; '~' = approximate, '>' = bound, as the paper states them)."""
 
 import pytest

@@ -315,7 +315,7 @@ def test_report_needs_a_run(tmp_path):
 
 
 def test_report_lists_evaluations_with_failed_frames(tmp_path):
-    """An evaluation step whose frames partly failed (issue 17) is listed with its counts."""
+    """An evaluation step whose frames partly failed is listed with its counts."""
     records = variant_rows(QUICK)
     k = next(
         i

@@ -3,8 +3,8 @@ before it; the others are dropped whole, at the sender.
 
 A link slower than the camera cannot carry every frame. Queued (in a radio modem's buffer, in DDS's
 history), frames fall further and further behind; sent anyway, the link's queue overflows and drops
-packets, and a frame that loses one packet is lost whole after using its share of the link (measured,
-issue 22: at 4 Mbit/s for 6 Mbit/s of images, 1 frame in 30 reached the ground). The gate keeps a budget
+packets, and a frame that loses one packet is lost whole after using its share of the link (measured:
+at 4 Mbit/s for 6 Mbit/s of images, 1 frame in 30 reached the ground). The gate keeps a budget
 of ``link_mbit``: a frame of n bytes occupies the link for ``n * WIRE_OVERHEAD * 8 / link_mbit``
 microseconds from when it leaves, and a frame offered before the link is free is dropped before it costs
 the link anything. So at most one frame is in flight, whole frames cross, and the latency a frame adds is

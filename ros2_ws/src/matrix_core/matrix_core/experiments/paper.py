@@ -1,11 +1,11 @@
-"""The MATRIX paper's numbers that our experiments are compared with (percent), exactly as issue #16 of
-this project lists them from the paper. A :class:`Figure` keeps the paper's qualifier: ``~`` where the
+"""The MATRIX paper's numbers that our experiments are compared with (percent), exactly as the
+paper states them. A :class:`Figure` keeps the paper's qualifier: ``~`` where the
 paper gives an approximate value (read off a figure or written "about"), ``>`` where it gives a bound.
 Statements without a figure are kept as text (``*_NOTE``)."""
 
 from dataclasses import dataclass, field
 
-SOURCE = 'MATRIX paper (figures as listed in issue #16 of this repository)'
+SOURCE = 'MATRIX paper (its figures as the paper states them)'
 
 
 @dataclass(frozen=True)

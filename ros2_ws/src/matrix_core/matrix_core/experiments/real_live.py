@@ -1,11 +1,11 @@
-"""The real-data row of the experiments (issue 16): the shipped default detector on the real MATRIX sample
+"""The real-data row of the experiments: the shipped default detector on the real MATRIX sample
 through the live graph, the path of ``make demo``. The sample becomes a rosbag2, ``run_graph`` replays it in
 lockstep through every node (calib + register per drone, fuse, recorder), and the recording is scored against
 the bag's ground truth (``matrix-tracker evaluate-recording``). Only child processes touch ROS: this module
 imports neither rclpy nor messages.
 
-The sample's frames 0-4 are the real validation set on which the default checkpoint was selected (README
-"The detector"): its figures are no test accuracy, and the report says so.
+The sample's frames 0-4 are the real validation set on which the default checkpoint was selected
+(docs/detector.md): its figures are no test accuracy, and the report says so.
 """
 
 import hashlib

@@ -141,7 +141,7 @@ MEDIUM = replace(
 # 2-core machine with two trainings at once, i.e. about 0.5 s per frame and epoch) on shorter sequences, so
 # that the whole plan fits one working session with two steps at once: 8 + 1.8 (transfer sweep) trainings
 # of 300 frames x 10 epochs = about 195 thread-minutes, plus simulation, 14 registration runs, 2 PnP runs
-# and about 60 evaluations. Measured end to end on an idle machine (stop 31, commit d4e417f): 109.5 min wall,
+# and about 60 evaluations. Measured end to end on an idle 2-core machine (docs/RESULTS.md): 109.5 min wall,
 # 218.5 min summed over the 89 steps (complex trainings about 28 min each, simple 15, evaluations 2-8 s).
 STANDARD = ExperimentSize(
     name='standard',

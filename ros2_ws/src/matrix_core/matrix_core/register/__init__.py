@@ -1,4 +1,4 @@
-"""Feature-based registration of each drone's current image to its reference image (issue 5).
+"""Feature-based registration of each drone's current image to its reference image.
 
 Pipeline (one idea per module): ``backends`` (registry of feature backends: ``backend_sift``,
 ``backend_kornia``) -> ``matching`` (symmetric ratio test) -> ``fit`` (RANSAC/MAGSAC homography) ->

@@ -12,7 +12,7 @@ features against the reference, a frame is registered from the last one, in two 
    (small residual motion, the ground's perspective change already undone by the warp) and ``anchor_H_cur``
    is fitted to them directly. At twice the flow's resolution a corner is located twice as finely, so more
    of the anchor's corners agree within the inlier threshold of a full-resolution pixel (fewer chains are
-   doubted, each costing a full registration) and the fit is tighter (README "Refinement at 960x540").
+   doubted, each costing a full registration) and the fit is tighter (docs/registration.md).
 
 Step 2 makes each frame one hop from its anchor: the error of the flow steps does not add up along the
 chain (measured: chained flow steps alone drift by about 0.2 px per frame). The caller chains
@@ -39,15 +39,15 @@ from matrix_core.register.ground_mask import ground_pixels
 # Flow: an 11 px window on 5 pyramid levels (0-4) follows ~80 reduced px (320 full-res px) of motion, more
 # than a MATRIX drone moves in 0.5 s (up to ~240 full-res px); the last step's motion predicts the next. The
 # step only predicts the refinement's warp: 11 px instead of 15 (half the pixels per corner) registered the same
-# frames as exactly (README "Registration that tracks", stop 41).
+# frames as exactly (scripts/bench_register.py, real sample and simulated seeds 3 and 11).
 FLOW_WINDOW, FLOW_LEVELS = (11, 11), 4
 # Refinement: the residual after the warp is about a pixel; a small window keeps the local planar model. Its
 # side in flow-image pixels (the ground it covers); in refinement-image pixels it is this times refine_scale /
-# scale, rounded down to odd: 19 px at 960x540 (measured against 13-21 px on simulated complex seeds 3 and 11,
-# README "Refinement at 960x540"), the former 9 px when the refinement runs at the flow's own scale.
+# scale, rounded down to odd: 19 px at 960x540 (measured against 13-21 px on simulated complex seeds 3 and 11:
+# smaller windows let a frame slip, larger ones cost CPU), 9 px when the refinement runs at the flow's own scale.
 REFINE_WINDOW_FLOW_PX = 9.5
 # Pyramid levels above the refinement image: at 960x540 none (the residual, 1-2 px, is well inside the window;
-# a second level was dearer and no more exact on the simulated seeds); at the flow's own scale one, as before.
+# a second level was dearer and no more exact on the simulated seeds); at the flow's own scale one.
 REFINE_LEVELS_FINE, REFINE_LEVELS_FLOW_SCALE = 0, 1
 LK_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.01)
 # A corner is kept when tracking it back lands within this many pixels (of the image tracked in) of where it

@@ -1,7 +1,7 @@
 """Warming a process up for live registration: the first registration a process runs pays for first calls
 (OpenCV's SIFT, optical flow and homography fits, BLAS, regular expressions compiled and modules imported on
 first use). In a live graph every drone process would pay them on its first frame, all at once, on a computer
-that the first frame already loads most (README "Running the whole graph", stop 45)."""
+that the first frame already loads most (docs/registration.md)."""
 
 from dataclasses import replace
 
