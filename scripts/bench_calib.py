@@ -7,7 +7,7 @@ calibration, then the previous result) at full resolution (1920x1080) and at hal
 frame plus the accuracy against the stored calibration.
 
     python scripts/bench_calib.py [--dataset ../shared/matrix_sample] [--scales 1.0 0.5] [--repeat 1]
-    python scripts/bench_calib.py --sim-frames 50      # also: issue 4's simulated acceptance, 3 variants
+    python scripts/bench_calib.py --sim-frames 50      # also: the simulated acceptance, 3 variants
     python scripts/bench_calib.py --track_corners false  # any CalibSettings flag (here: search every frame)
 
 With ``--sim-frames N`` it also simulates N frames of each simulator variant (seed 7) into a temporary

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Distributed deployment benchmark (issue 22): the real sample over limited links, one host per drone.
+"""Distributed deployment benchmark: the real sample over limited links, one host per drone.
 
 Each drone host (a network namespace, matrix_bringup.netns_harness) runs its own camera (the bag player with
 only its streams), register, calib and link_sender (the images it lets across, within ``--link_share`` of

@@ -9,7 +9,8 @@ over DDS by this script with 8 drones' streams of the real MATRIX sample (1920x1
 
     python scripts/bench_fuse.py [--frames 20] [--rate 2.0] [--cpu 0] [--raw]
 
-Prints one table; targets (issue 7): >= 2 frames/s on one core with p95 latency <= 1 s; issue 18: >= 5 frames/s.
+Prints one table; targets: >= 2 frames/s on one core with p95 latency <= 1 s, and >= 5 frames/s for a drone graph
+at 2 Hz on a small computer.
 Besides wall-clock figures it prints the fuse process's CPU time per frame in the throughput phase (all its
 threads, DDS included, from /proc): on a machine others load, 1 / that is the rate one free core would give.
 """

@@ -30,7 +30,7 @@ register's resize).
     python scripts/bench_graph.py --separate                   # the separate calib and register processes
     python scripts/bench_graph.py --register_params FILE       # e.g. register.yaml with mode: reference
 
-Acceptance (issue 18): 8 drones, 1080p JPEG bags, this 2-core machine: lockstep >= 2 frames/s (milestone
+Targets: 8 drones, 1080p JPEG bags, this 2-core machine: lockstep >= 2 frames/s (milestone
 >= 1), realtime 2 Hz: no frame dropped, latency p95 <= 1 s.
 """
 

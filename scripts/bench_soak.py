@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Soak benchmark (issue 17): a long simulated sequence replayed through the whole graph in lockstep.
+"""Soak benchmark: a long simulated sequence replayed through the whole graph in lockstep.
 
 The graph and its probe are those of ``scripts/bench_graph.py`` (run_graph's processes, a probe on the first
 drone's images and on ``/tracks``). While it runs, the resident memory (``VmRSS`` of /proc/PID/status, the

@@ -7,7 +7,7 @@
 #   detector_seedN.history.json.
 # Usage: bash scripts/train_detector.sh 0 1   (data first: bash scripts/detector_data.sh)
 # Another recipe of bev/configs by CONFIG: CONFIG=detector_tiny bash scripts/train_detector.sh 0 1 writes
-# detector_tiny_seedN.* (the smaller network of issue 18, README "A faster detector").
+# detector_tiny_seedN.* (the smaller, faster network: docs/detector.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/env.sh

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Choose the BEV tracker's settings on VALIDATION data only (issue 15's protocol): one inference run of a
+"""Choose the BEV tracker's settings on VALIDATION data only (the detector's protocol): one inference run of a
 checkpoint per validation sequence, then the tracker re-run with other settings on the same detections.
 
 Validation sequences (never the test seeds 2xx; ``bash scripts/detector_data.sh val trackval`` makes them):
@@ -13,7 +13,7 @@ then the defaults against the best per sequence; writes
 ``OUT/trials.json`` and ``OUT/tune_tracker.png`` (objective per candidate value of each parameter).
 
     python scripts/tune_tracker.py [--checkpoint PATH] [--out out/tune_tracker]
-    # how the shipped defaults were found: from the previous defaults, gate_m held (README "The detector")
+    # how the shipped defaults were found: from birth_hits 2 and report_coasting 0, gate_m held (docs/detector.md)
     python scripts/tune_tracker.py --set birth_hits=2 report_coasting=0 --keep gate_m
 """
 

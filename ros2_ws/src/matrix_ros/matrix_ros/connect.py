@@ -12,8 +12,8 @@ while that publisher does not see the subscription yet, and what it publishes me
 subscriber that cannot lose a message also asks for transient-local history (fuse: ``geometry_qos``), which
 the workspace's publishers offer (``matrix_ros.qos``). The same one-sided window exists between a player
 and the image subscriptions it waits for: it counts a subscription as soon as its own writer matched it, while
-the subscriber may not have matched the writer yet and would drop the first frame (seen in 2 of 3 simulated
-lockstep runs of ``bench_graph.py`` at stop 35: frame 0 of one drone never reached fuse). A player therefore
+the subscriber may not have matched the writer yet and would drop the first frame (seen in simulated lockstep
+runs of ``bench_graph.py``: frame 0 of one drone never reached fuse). A player therefore
 starts only once the subscriptions have been there for ``SETTLE_S`` (:class:`SubscribersReady`).
 """
 

@@ -12,8 +12,8 @@ it decodes colour images itself and hands nothing on.
 calib may run on its own thread (:meth:`DroneLink.own_thread`, calib's ``thread_niceness``): register then
 queues each call and goes on with the next image, and calib's thread, niced further, calibrates when the cores
 have time. On a computer shared by several drones the registrations, which fuse waits for, then go first and
-calibration (which nothing in the graph waits for) fills the time left (measured: README "Running the whole
-graph", stop 40). At most ``MAX_WAITING_IMAGES`` images of each drone wait for calib; when one more comes the
+calibration (which nothing in the graph waits for) fills the time left (measured with ``scripts/bench_graph.py``:
+docs/running-the-graph.md). At most ``MAX_WAITING_IMAGES`` images of each drone wait for calib; when one more comes the
 drone's oldest is dropped and logged (calib then warns of its registration without an image): under a load the
 computer cannot carry, calib skips frames instead of falling ever further behind. The limit is per drone: a
 process hosting 8 drones (``drones_per_process``) in a lockstep replay with two frames out has 16 images
