@@ -19,6 +19,7 @@ Conventions (README, "Conventions"):
 import cv2
 import numpy as np
 
+from matrix_core.encoded_images import CorruptImage, decode_image
 from matrix_core.geometry.camera import Camera, pose_matrix
 from matrix_core.geometry.quaternion import matrix_from_quaternion, quaternion_from_matrix
 from matrix_core.register.registration import (
@@ -106,6 +107,15 @@ def compressed_fields(image: np.ndarray, fmt: str = 'jpeg', quality: int = 95) -
     return {'format': fmt, 'data': buf.tobytes()}
 
 
+def _decode_compressed(msg, data: np.ndarray, flags: int) -> np.ndarray:
+    """A CompressedImage's ``data`` decoded with ``flags``; :class:`ConversionError` when it is cut short or
+    corrupt (``encoded_images``: libjpeg alone decodes half a JPEG into a valid-looking image)."""
+    try:
+        return decode_image(data, flags)
+    except CorruptImage as exc:
+        raise ConversionError(f'corrupt compressed image ({msg.format!r}, {len(data)} bytes): {exc}') from exc
+
+
 def image_from_msg(msg, reduction: int = 1) -> np.ndarray:
     """sensor_msgs/Image (bgr8, rgb8, mono8, bgra8, rgba8) or CompressedImage (jpeg/png) -> (H, W, 3) BGR
     uint8. A JPEG with ``reduction`` 2, 4 or 8 is decoded directly at that fraction of its size
@@ -116,10 +126,7 @@ def image_from_msg(msg, reduction: int = 1) -> np.ndarray:
         data = _bytes(msg.data)
         if len(data) == 0:
             raise ConversionError('empty compressed image')
-        img = cv2.imdecode(data, _REDUCED[reduction] if is_jpeg(msg) else cv2.IMREAD_COLOR)
-        if img is None:
-            raise ConversionError(f'corrupt compressed image ({msg.format!r}, {len(data)} bytes)')
-        return img
+        return _decode_compressed(msg, data, _REDUCED[reduction] if is_jpeg(msg) else cv2.IMREAD_COLOR)
     channels = _CHANNELS.get(msg.encoding)
     if channels is None:
         raise ConversionError(f'unsupported image encoding {msg.encoding!r} (supported: {sorted(_CHANNELS)})')
@@ -141,10 +148,7 @@ def gray_image_from_msg(msg) -> np.ndarray:
     grey (libjpeg then skips the colour upsampling and conversion: the cheapest full-size decode), for
     consumers that use grey only (calib, register; ``matrix_ros.drone_link``)."""
     if hasattr(msg, 'format') and len(msg.data) and is_jpeg(msg):
-        img = cv2.imdecode(_bytes(msg.data), cv2.IMREAD_GRAYSCALE)
-        if img is None:
-            raise ConversionError(f'corrupt compressed image ({msg.format!r}, {len(msg.data)} bytes)')
-        return img
+        return _decode_compressed(msg, _bytes(msg.data), cv2.IMREAD_GRAYSCALE)
     return cv2.cvtColor(image_from_msg(msg), cv2.COLOR_BGR2GRAY)
 
 

@@ -2,6 +2,8 @@
 
 from dataclasses import dataclass, field
 
+from matrix_core.site.shipped import matrix_site
+
 
 @dataclass
 class BevSettings:
@@ -9,7 +11,10 @@ class BevSettings:
 
     model: str = field(default='bev_small', metadata={'help': 'model name in matrix_core.bev.registry.MODELS'})
     cell_m: float = field(
-        default=0.25, metadata={'help': 'BEV cell size (m); 0.25 keeps a 30 m scene at 128x128 cells, fast on a CPU'}
+        default=matrix_site().cell_m,
+        metadata={
+            'help': "BEV cell size (m); the MATRIX site's 0.25 keeps a 30 m scene at 128x128 cells, fast on a CPU"
+        },
     )
     margin_m: float = field(default=1.0, metadata={'help': 'grid margin (m) added around the dataset area'})
     area: list[float] = field(

@@ -17,6 +17,7 @@ from matrix_core.bev.data import BevFrames
 from matrix_core.bev.evaluation import evaluate
 from matrix_core.bev.losses import bev_loss
 from matrix_core.bev.registry import build_model
+from matrix_core.output_paths import atomic_write_text
 
 TARGET_KEYS = ('heatmap', 'offset', 'tracking', 'center_mask', 'tracking_mask')
 
@@ -207,12 +208,12 @@ def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: boo
         )
         if config.average_epochs:
             save_checkpoint(out_dir / f'epoch{epoch + 1}.pt', model, config.bev, epoch=epoch + 1)
-        (out_dir / 'history.json').write_text(json.dumps(history, indent=2))
+        atomic_write_text(out_dir / 'history.json', json.dumps(history, indent=2))
     if config.average_epochs and not any('averaged' in h for h in history):
         record = average_last_epochs(config, out_dir, sequences, val_sequences, best, progress)
         history.append(record)
         log(' '.join(f'{k}={v:.4f}' if isinstance(v, float) else f'{k}={v}' for k, v in record.items()))
-        (out_dir / 'history.json').write_text(json.dumps(history, indent=2))
+        atomic_write_text(out_dir / 'history.json', json.dumps(history, indent=2))
     return history
 
 

@@ -16,6 +16,10 @@ holds its last good pose) is listed in the CSV but gets no calibration file, so 
 it for a measurement; ``--write-stale`` writes those last good poses too (column ``written``). Failed
 frames are never written.
 
+The output folder must not be, contain or lie inside the dataset or ``--registration`` folder, and must be
+new or empty (``--overwrite``: write into it); the views, the records and the scene are checked before the
+first frame.
+
 No frame ends the run: a frame whose image cannot be read or whose calibration raises (and every frame of a
 drone without a prior) is ``failed`` with the step in ``failure`` and the reason in ``message``; the summary
 counts them. :func:`simulated_sequence` makes a sequence to calibrate (the calibration's tests and
@@ -23,11 +27,13 @@ benchmarks).
 """
 
 import csv
+import io
 import os
 from pathlib import Path
 
 from tqdm import tqdm
 
+from matrix_core.cli.argument_types import positive_float
 from matrix_core.cli.selection import add_selection_arguments
 from matrix_core.calib.drone_calibrator import FAILED, OK, STALE, DroneCalibrator
 from matrix_core.calib.evaluation import pose_errors, summarize_errors
@@ -37,6 +43,7 @@ from matrix_core.calib.settings import CalibSettings
 from matrix_core.cli.main import main as cli_main
 from matrix_core.datasets import DatasetError, MatrixDataset, MatrixWriter, open_dataset
 from matrix_core.register.file_frame import read_registration
+from matrix_core.output_paths import atomic_write_text, check_output
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
 STATUS_FILE = 'calibration_status.csv'
@@ -67,7 +74,7 @@ def add_parser(subparsers) -> None:
         'calibrate', help='estimate every frame\'s camera pose from the ground checkerboards', description=__doc__
     )
     add_selection_arguments(p, 'calibrate', 'MATRIX-format folder', 'output folder')
-    p.add_argument('--frame-period', type=float, default=0.5, help='seconds between frames (for ages)')
+    p.add_argument('--frame-period', type=positive_float, default=0.5, help='seconds between frames (for ages)')
     p.add_argument('--compare', action='store_true', help='print errors against the stored calibrations')
     p.add_argument(
         '--registration',
@@ -215,10 +222,11 @@ def calibrate_dataset(
                     tqdm.write(f'{view} frame {frame}: {row["message"]}')
                 rows.append(row)
                 bar.update(1)
-    with open(out / STATUS_FILE, 'w', newline='') as fh:
-        w = csv.DictWriter(fh, COLUMNS)
-        w.writeheader()
-        w.writerows(rows)
+    table = io.StringIO(newline='')
+    w = csv.DictWriter(table, COLUMNS)
+    w.writeheader()
+    w.writerows(rows)
+    atomic_write_text(out / STATUS_FILE, table.getvalue())
     return rows
 
 
@@ -242,10 +250,14 @@ def simulated_sequence(variant: str, frames: int, seed: int, out) -> Path:
 
 def run(args) -> int:
     settings = settings_from_namespace(CalibSettings, args)
+    out = check_output(args.out, [args.dataset, args.registration, settings.config], args.overwrite)
     dataset = open_dataset(args.dataset)
     if not isinstance(dataset, MatrixDataset):
         raise DatasetError(f'{args.dataset} is a {dataset.format_name} folder; calibrate needs MATRIX format')
-    out = Path(args.out)
+    dataset.select_views(args.views)  # checked before the first frame, as the records and the scene below
+    if args.registration is not None:
+        registration_folder(args.registration)
+    load_scene(settings.config)
     rows = calibrate_dataset(
         dataset,
         out,

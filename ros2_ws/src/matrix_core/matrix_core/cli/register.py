@@ -12,6 +12,9 @@ every frame of a drone whose reference cannot be used) is reported with the step
 summary row (``failure``), and ``stats`` counts them: ``failed`` (not registered), ``raised`` (a step
 raised) and ``unmeasured`` (registered, but the error against the calibration could not be computed).
 
+The output folder must not be, contain or lie inside the dataset; its ``registration/`` must be new or
+empty (``--overwrite``: write into it).
+
 The reference of each drone is the folder's ``reference/`` image and calibration; without one, the
 first frame (with its stored calibration) is the reference. Obstacles and the flat-ground extent come from
 the folder's ``matrix_tracker_meta.json`` when it states them (simulated folders, see
@@ -28,8 +31,10 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from matrix_core.cli.argument_types import non_negative_int
 from matrix_core.cli.selection import add_selection_arguments
 from matrix_core.datasets import DatasetError, MatrixDataset, open_dataset
+from matrix_core.output_paths import atomic_write_text, check_output
 from matrix_core.register.backends import make_backend
 from matrix_core.register.evaluate import homography_error_px
 from matrix_core.register.file_frame import record_name, registration_to_record
@@ -50,7 +55,7 @@ def add_parser(subparsers) -> None:
     )
     p.add_argument(
         '--png',
-        type=int,
+        type=non_negative_int,
         nargs='?',
         const=1,
         default=0,
@@ -99,9 +104,9 @@ def _register_frame(args, dataset, settings, view, frame, index, registrar, imag
     except Exception as exc:  # a bad frame (unreadable image, registration bug) must not end the batch
         reason = _failure('register', exc)
         failed = Registration.failed(reason, reference_id=registrar.reference_id, backend=registrar.backend.name)
-        (out / name).write_text(json.dumps(registration_to_record(failed), indent=1))
         return _pair(view, frame, STATUS_FAILED, reason, reason)
-    (out / name).write_text(json.dumps(registration_to_record(result), indent=1))
+        atomic_write_text(out / name, json.dumps(registration_to_record(failed), indent=1))
+    atomic_write_text(out / name, json.dumps(registration_to_record(result), indent=1))
     failure, error = '', None
     if result.ok:
         try:
@@ -130,6 +135,9 @@ def _register_frame(args, dataset, settings, view, frame, index, registrar, imag
 
 
 def run(args) -> int:
+    # the output folder is checked before any work: never inside the dataset, and registration/ new or empty
+    check_output(args.out, [args.dataset], overwrite=True)
+    out = check_output(Path(args.out) / 'registration', overwrite=args.overwrite)
     dataset = open_dataset(args.dataset)
     if not isinstance(dataset, MatrixDataset):
         raise DatasetError(f'{args.dataset}: register needs a MATRIX folder (drones with per-frame calibration)')
@@ -137,9 +145,8 @@ def run(args) -> int:
     if note:
         print(note)
     views, frames = dataset.select_views(args.views), dataset.select_frames(args.max_frames)
-    out = Path(args.out) / 'registration'
-    out.mkdir(parents=True, exist_ok=True)
     backend = make_backend(settings)
+    out.mkdir(parents=True, exist_ok=True)
     summary = []
     with tqdm(total=len(views) * len(frames), desc='register', unit='image') as bar:
         for view in views:
@@ -171,7 +178,7 @@ def run(args) -> int:
         'error_px_max': float(np.max(errors)) if len(errors) else None,
         'seconds_median': float(np.median(seconds)) if seconds else None,
     }
-    (out / 'summary.json').write_text(json.dumps({'stats': stats, 'pairs': summary}, indent=1))
+    atomic_write_text(out / 'summary.json', json.dumps({'stats': stats, 'pairs': summary}, indent=1))
     print(
         f'registered {len(summary) - failed}/{len(summary)} images with {backend.name}; error vs stored '
         f'calibration: median {stats["error_px_median"]} px, max {stats["error_px_max"]} px '

@@ -27,6 +27,7 @@ These reproduce the stored projections exactly (tested on the real sample).
 import numpy as np
 
 from matrix_core.geometry.camera import Camera, pose_matrix
+from matrix_core.site.shipped import matrix_site
 
 # Axis flips: N mirrors the camera x axis, M negates the world y axis (both are their own inverse).
 N = np.diag([-1.0, 1.0, 1.0])
@@ -37,7 +38,6 @@ POSITION_GRID_COLS = 300
 POSITION_CELL_M = 0.1
 PLANES_3D_OFFSET_M = np.array([7.5, 7.5, 5.0])  # added after converting Planes/3d.txt from cm to m
 ORIGINAL_BOGUS_PLANE_FRAMES = (0,)  # frames whose Planes 2-D files the original generator got wrong
-ORIGINAL_AREA_FILE_XY = ((0.0, 30.0), (0.0, 30.0))  # pedestrian area of the real data, file metres
 
 
 def _pixel_flip(width: int) -> np.ndarray:
@@ -117,10 +117,12 @@ def area_to_file(area) -> list:
     return [[float(x_min), float(x_max)], [0.0 - float(y_max), 0.0 - float(y_min)]]
 
 
-# The MATRIX square (0, -30, 30, 0): internal (x_min, y_min, x_max, y_max) metres. The one source of the
-# default area of every component (register, fuse, graph monitor, simulator); it is also the extent of the
-# positionID grid (300 x 300 cells of 0.1 m), so simulated areas must lie inside it.
-MATRIX_AREA = area_from_file(*ORIGINAL_AREA_FILE_XY)
+# The MATRIX square (0, -30, 30, 0): internal (x_min, y_min, x_max, y_max) metres, read from the shipped
+# MATRIX site file (matrix_core/site/sites/matrix.yaml). The default area of every component (register, fuse,
+# graph monitor, simulator); it is also the extent of the positionID grid (300 x 300 cells of 0.1 m), so
+# simulated areas must lie inside it.
+MATRIX_AREA = matrix_site().area
+ORIGINAL_AREA_FILE_XY = tuple(tuple(r) for r in area_to_file(MATRIX_AREA))  # pedestrian area, file metres
 
 
 def pixels_from_file(uv_file) -> np.ndarray:
@@ -185,7 +187,7 @@ def view_name(drone_number: int) -> str:
     return f'D{drone_number}'
 
 
-MATRIX_VIEWS = tuple(view_name(n) for n in range(1, 9))  # the eight drones of the MATRIX scenes
+MATRIX_VIEWS = matrix_site().drone_names  # the eight drones of the MATRIX scenes, D1..D8
 
 
 def drone_number(view: str) -> int:

@@ -3,8 +3,11 @@ of the ``register`` node, same names and defaults)."""
 
 from dataclasses import dataclass, field
 
-# The real MATRIX scene's central block, internal world metres: x0, y0, x1, y1 (footprint), height.
-MATRIX_BLOCK = [12.5, -17.5, 17.5, -12.5, 30.0]
+from matrix_core.site.shipped import matrix_site
+
+# The real MATRIX scene's central block, internal world metres: x0, y0, x1, y1 (footprint), height; the
+# obstacles of the shipped MATRIX site file.
+MATRIX_BLOCK = matrix_site().obstacle_boxes
 
 
 @dataclass

@@ -167,9 +167,9 @@ def _camera(where: _Where, value) -> CameraSpec:
             raise (where / 'dist').error(f'expected 1 to 5 numbers (k1, k2, p1, p2, k3), got {_kind(d)}')
         dist[: len(d)] = _numbers(where / 'dist', d, len(d))
     try:
-        K = check_intrinsics(K, dist, size, 'K')
+        K = check_intrinsics(K, dist, size, 'camera')
     except ValueError as exc:
-        raise where.error(str(exc)) from None
+        raise where.error(str(exc).removeprefix('camera: ')) from None
     if not (K[0, 0] > 0 and K[1, 1] > 0 and np.allclose(K[2], [0.0, 0.0, 1.0])):
         raise (where / 'K').error(f'expected [fx, 0, cx, 0, fy, cy, 0, 0, 1] with fx, fy > 0, got {data["K"]}')
     return CameraSpec((int(size[0]), int(size[1])), K, dist)

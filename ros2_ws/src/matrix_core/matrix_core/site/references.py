@@ -57,6 +57,11 @@ def reference_files(site: Site) -> list:
     return out
 
 
+def _key(site: Site, drone: str) -> str:
+    """How an error names a drone's entry: ``drones[2] (P3)``."""
+    return f'drones[{site.drone_names.index(drone)}] ({drone})'
+
+
 def reference_camera(site: Site, drone: DroneSpec) -> Camera:
     """The calibration of ``drone``'s reference image, in the internal conventions; SiteError when unreadable."""
     from matrix_core.datasets import matrix_conventions as conv
@@ -64,10 +69,10 @@ def reference_camera(site: Site, drone: DroneSpec) -> Camera:
     from matrix_core.datasets.types import DatasetError
 
     if drone.reference is None:
-        raise SiteError(f'{site.path}: drone {drone.name} has no reference (references.source is simulate)')
+        raise SiteError(f'{site.path}: {_key(site, drone.name)}: no reference (references.source is simulate)')
     cal = drone.reference.calibration
     if cal.format is not CalibrationFormat.MATRIX_XML:  # the one format so far; a new one is read here
-        raise SiteError(f'{site.path}: drone {drone.name}: cannot read calibration format {cal.format.value}')
+        raise SiteError(f'{site.path}: {_key(site, drone.name)}: cannot read calibration format {cal.format.value}')
     try:
         intr = read_matrices(resolve(site, cal.intrinsic), ['camera_matrix', 'distortion_coefficients'])
         extr = read_matrices(resolve(site, cal.extrinsic), ['rvec', 'tvec'])
@@ -75,7 +80,7 @@ def reference_camera(site: Site, drone: DroneSpec) -> Camera:
             intr['camera_matrix'], intr['distortion_coefficients'], extr['rvec'], extr['tvec'], *drone.camera.image_size
         )
     except (DatasetError, ValueError) as exc:
-        raise SiteError(f'{site.path}: drones ({drone.name}).reference.calibration: {exc}') from None
+        raise SiteError(f'{site.path}: {_key(site, drone.name)}.reference.calibration: {exc}') from None
 
 
 def require_references(site: Site) -> None:
@@ -91,15 +96,15 @@ def require_references(site: Site) -> None:
         )
     for files in reference_files(site):
         if files.missing:
-            raise SiteError(f'{site.path}: drones ({files.drone}).reference: no such file {files.missing[0]}')
+            raise SiteError(f'{site.path}: {_key(site, files.drone)}.reference: no such file {files.missing[0]}')
         drone = site.drone(files.drone)
         try:
             size = tuple(image_size(files.image))
         except DatasetError as exc:
-            raise SiteError(f'{site.path}: drones ({drone.name}).reference.image: {exc}') from None
+            raise SiteError(f'{site.path}: {_key(site, drone.name)}.reference.image: {exc}') from None
         if size != drone.camera.image_size:
             raise SiteError(
-                f'{site.path}: drones ({drone.name}).reference.image: {files.image} is {size[0]}x{size[1]}, '
+                f'{site.path}: {_key(site, drone.name)}.reference.image: {files.image} is {size[0]}x{size[1]}, '
                 f'camera.image_size is {drone.camera.image_size[0]}x{drone.camera.image_size[1]}'
             )
         reference_camera(site, drone)
