@@ -49,7 +49,7 @@ def test_errors_are_clear(tmp_path):
 
 
 def test_a_mistyped_flag_names_the_closest_one(tmp_path):
-    """Issue 17: an unknown flag of a subcommand is an error that suggests the flag meant."""
+    """An unknown flag of a subcommand is an error that suggests the flag meant."""
     typo = run('simulate', '--frams', '3', '--out', tmp_path / 'sim')
     assert typo.returncode == 2 and 'unrecognized arguments: --frams 3' in typo.stderr
     assert '--frams: did you mean --frames?' in typo.stderr and not (tmp_path / 'sim').exists()

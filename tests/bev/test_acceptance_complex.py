@@ -1,4 +1,4 @@
-"""Issue 6 acceptance: the shipped default detector on a freshly simulated, held-out complex sequence (a seed
+"""Acceptance: the shipped default detector on a freshly simulated, held-out complex sequence (a seed
 no training or validation sequence used; moving drones; per-frame ground-truth calibration).
 
 Thresholds of the issue: MODA >= 85 %, MOTA >= 80 %, IDF1 >= 75 %, MT >= 70 % of the people, and removing

@@ -1,6 +1,6 @@
 """``matrix-tracker evaluate`` on a damaged copy of the real MATRIX sample: no frame ends the run. A view whose
 image or calibration cannot be used is masked in that frame, a frame that cannot run is not scored, and both
-are printed and listed in ``metrics.json`` with their reasons (issue 17)."""
+are printed and listed in ``metrics.json`` with their reasons."""
 
 import json
 import os

@@ -1,7 +1,7 @@
-"""The shipped default detector (trained on simulated scenes only, issue 15) on the REAL MATRIX sample: the
-CI regression of the issue (MODA >= 90 % on frames 0-4) and the end-to-end check that geometry, lifting and
+"""The shipped default detector (trained on simulated scenes only) on the REAL MATRIX sample: a
+CI regression check (MODA >= 90 % on frames 0-4) and the end-to-end check that geometry, lifting and
 decoding agree between simulation and reality. Frames 0-4 are the validation set the default was selected
-on (README "The detector"): this guards against regressions, it is no test accuracy."""
+on (docs/detector.md): this guards against regressions, it is no test accuracy."""
 
 import pytest
 import torch
@@ -28,8 +28,8 @@ def test_shipped_checkpoint_on_real_sample(matrix_sample):
 
 @pytest.mark.slow
 def test_the_faster_detector_on_real_sample(matrix_sample):
-    # bev_tiny, the detector for computers where fuse must run in a third of the time (issue 18; README "A faster
-    # detector"): measured when shipped MODA 0.965, precision 1.000 (scripts/detector_report.py, frames 0-4 are
+    # bev_tiny, the detector for computers where fuse must run in a third of the time (docs/detector.md):
+    # measured when shipped MODA 0.965, precision 1.000 (scripts/detector_report.py, frames 0-4 are
     # its validation frames too)
     torch.set_num_threads(1)
     model, settings = load_model(shipped_checkpoint('detector_tiny_seed1.pt'))

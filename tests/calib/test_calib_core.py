@@ -228,7 +228,7 @@ def test_cli_writes_calibrations_the_reader_reads(dataset, tmp_path, capsys):
 
 @pytest.mark.slow
 def test_acceptance_real_sample_all_drones(dataset, scene):
-    """Issue 4 acceptance: 8 drones x 5 frames, median <= 0.1 deg / 3 cm, worst <= 0.5 deg / 0.3 m;
+    """Acceptance: 8 drones x 5 frames, median <= 0.1 deg / 3 cm, worst <= 0.5 deg / 0.3 m;
     frames without an acceptable pose must be stale/failed, never wrong. At least 3/4 must be ok (the
     far, grazing boards of D3 and D7 are not found in some frames)."""
     rot, centre = [], []

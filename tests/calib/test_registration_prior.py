@@ -40,7 +40,7 @@ def test_every_real_frame_is_calibrated_from_its_registration(dataset):
     and every frame within 0.15 deg / 7 cm of the stored calibration (searching gets 32 of 40 frames, worst
     0.17 deg / 5.6 cm). The worst frame (D2 frame 0, registered with 28 inliers) is 6.4 cm on an Intel Xeon
     and was under 6 cm on the AMD EPYC machines before; its rotation is 0.089 deg on an AMD EPYC with AVX-512
-    and 0.109 deg / 6.3 cm on one without (stop 38, the same code): OpenCV's SIFT differs in the last bits
+    and 0.109 deg / 6.3 cm on one without (the same code): OpenCV's SIFT differs in the last bits
     between CPU vector paths, so the bound on the worst frame leaves room for that; the medians (0.015 deg /
     0.7 cm here) keep the test tight."""
     rots, centres = [], []

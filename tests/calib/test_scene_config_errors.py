@@ -1,4 +1,4 @@
-"""A calibration scene YAML with a mistyped key is an error naming it and the allowed keys (issue 17)."""
+"""A calibration scene YAML with a mistyped key is an error naming it and the allowed keys."""
 
 import pytest
 import yaml

@@ -1,4 +1,4 @@
-"""Damaged and unfinished MCAP bags (issue 17): a bag cut short, one whose records were overwritten in the
+"""Damaged and unfinished MCAP bags: a bag cut short, one whose records were overwritten in the
 middle, one that is not MCAP at all, and one without metadata.yaml (its writer killed). Each yields its whole
 frames before the damage, quickly, then a clear :class:`BagDamaged`; none hangs."""
 

@@ -1,4 +1,4 @@
-"""Malformed MATRIX folders (issue 17), on a copy of the real sample: missing files, bad XML and JSON, wrong
+"""Malformed MATRIX folders, on a copy of the real sample: missing files, bad XML and JSON, wrong
 numbering. Each is a :class:`DatasetError` naming the file and what is wrong, or a frame left out with the
 reason (``incomplete_frames``); never a crash from inside OpenCV or json, never a silent wrong answer."""
 

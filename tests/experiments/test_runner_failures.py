@@ -1,6 +1,6 @@
 """``matrix-tracker experiments``: a failing step is recorded with its reason and traceback, the steps that
 need it are skipped, the others run; ``run.json`` is rewritten after every step (a run killed midway says
-how far it got); a rerun retries the failed step and finds the others cached (issue 17)."""
+how far it got); a rerun retries the failed step and finds the others cached."""
 
 import json
 

@@ -1,4 +1,4 @@
-"""Hostile inputs of one view of a live frame (issue 17), as the fuse node hands them to
+"""Hostile inputs of one view of a live frame, as the fuse node hands them to
 ``fusion.view_inputs``: images of the wrong size, encoding or zero bytes; NaN, Inf, singular and absurdly
 scaled homographies and CameraInfo. Each bad one makes that view missing with its reason (the node logs it
 and publishes it in /diagnostics, tests/system/test_fuse_faults.py); an absurd scale of a homography, which

@@ -1,5 +1,5 @@
 """``matrix-tracker simulate``: a frame that raises is left out whole and the sequence goes on; what was
-written stays readable, and ``simulate_summary.json`` says which frame failed and why (issue 17).
+written stays readable, and ``simulate_summary.json`` says which frame failed and why.
 
 "Nothing written is lost" for the simulator: every frame written before (and after) the failing one stays
 in the folder and the bag, the bag is closed properly, and no half-written frame is left for a reader to take

@@ -63,7 +63,7 @@ def test_bad_settings_and_streams():
 
 
 def test_duplicated_and_out_of_order_stamps_never_mix_frames():
-    """Issue 17: a stamp sent twice by a stream keeps one item per stream (the later one), an item older
+    """A stamp sent twice by a stream keeps one item per stream (the later one), an item older
     than the last emitted frame is refused and counted, and a frame never takes an item of another stamp."""
     sync = make(timeout=100)
     sync.add('D1/image', 1.0, 'a', now=0)

@@ -1,4 +1,4 @@
-"""System tests of the distributed deployment (issue 22): two drone hosts and a ground station as network
+"""System tests of the distributed deployment: two drone hosts and a ground station as network
 namespaces (matrix_bringup.netns_harness), the real sample through calib + register (on each drone host)
 and fuse (on the ground) over DDS across the links; no namespace or process is left behind.
 

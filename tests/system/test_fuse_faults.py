@@ -285,7 +285,7 @@ def test_images_wait_for_the_homography_stream(node_executable):
 
 
 def test_a_killed_fuse_node_is_replaced(node_executable, tmp_path):
-    """SIGKILL mid-run (issue 17): no shutdown at all, its DDS participant left behind until it expires; a new
+    """SIGKILL mid-run: no shutdown at all, its DDS participant left behind until it expires; a new
     process subscribes and fuses the next frames."""
     assert (
         cli(

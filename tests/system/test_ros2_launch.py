@@ -126,7 +126,7 @@ def test_full_graph_exits_non_zero_on_a_lockstep_timeout_or_a_dead_node(small_ba
 
 @pytest.mark.slow
 def test_full_graph_replays_the_frames_before_a_bag_is_cut(small_bag, tmp_path):
-    """Issue 17: a bag cut in its second frame: the graph starts, the first frame is played, fused and
+    """A bag cut in its second frame: the graph starts, the first frame is played, fused and
     recorded, then the launch exits 1 saying the bag is damaged; every node stopped, the recording closed."""
     import shutil
 

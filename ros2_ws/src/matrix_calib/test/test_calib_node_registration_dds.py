@@ -2,7 +2,7 @@
 real MATRIX images of drone D5 and registrations of the same stamps (ground truth, a failed one, a missing
 one, a NaN one) and checks from calib's diagnostics which frames the registration guided, and that every
 frame was still calibrated. Then the replay starts over (time goes back): the first frame again is calibrated
-afresh, not refused as late (issue 17)."""
+afresh, not refused as late."""
 
 import numpy as np
 import pytest

@@ -4,7 +4,7 @@ Two more processes take part: the installed ``dataset_player`` publishes frames 
 (a corner and a side drone, so the node handles several drones), and this test process listens to the
 homographies, checks them against the ground truth from the stored calibrations, then sends a corrupt
 image and checks that the node reports it and keeps running. Last, the replay starts over (frame 0 again at
-its first stamp, time going back): the drone starts afresh from its reference and registers it (issue 17).
+its first stamp, time going back): the drone starts afresh from its reference and registers it.
 """
 
 import time

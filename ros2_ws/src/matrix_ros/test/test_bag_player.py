@@ -182,7 +182,7 @@ def test_start_at_releases_frames_together_and_skips_frames_due_before_ready(sam
 
 
 def test_a_bag_cut_short_plays_its_frames_before_the_cut_and_says_so(sample_bag, node_executable, tmp_path):
-    """A copy of the sample bag cut in its second half (issue 17): the whole frames before the cut are played,
+    """A copy of the sample bag cut in its second half: the whole frames before the cut are played,
     the player exits with code 4 and says where and why it stopped; no hang."""
     import shutil
 

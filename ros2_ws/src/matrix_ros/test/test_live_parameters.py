@@ -46,7 +46,7 @@ def test_other_parameters_are_read_only(node):
 
 
 def test_an_unknown_parameter_is_an_error_naming_it_and_the_valid_ones():
-    """A mistyped ``-p`` (issue 17): rclpy would ignore it silently; declare_settings names it, the closest
+    """A mistyped ``-p``: rclpy would ignore it silently; declare_settings names it, the closest
     parameter and all of the node's."""
     rclpy.init(args=['test', '--ros-args', '-p', 'gap_z:=1.0', '-p', 'use_sim_time:=true'])
     node = Node('unknown_parameter_test')

@@ -113,7 +113,7 @@ def test_clock_comes_from_the_sequence_bag_and_parameters_override_it(tmp_path):
 
 
 def test_a_killed_recorder_keeps_what_it_flushed(matrix_sample, node_executable, tmp_path):
-    """SIGKILL mid-run (issue 17): no metadata.yaml and no index are written, but every message received
+    """SIGKILL mid-run: no metadata.yaml and no index are written, but every message received
     before the last flush is read back, then BagDamaged says the bag is unfinished; the MOT text is whole."""
     from matrix_core.bags import BagDamaged, raw_messages
 
