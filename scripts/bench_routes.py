@@ -6,7 +6,7 @@ TorchScript (trace + freeze + optimize_for_inference), ONNX Runtime and OpenVINO
 
     taskset -c 0 python scripts/bench_routes.py [--calls 6]
 
-ONNX Runtime and OpenVINO are not project dependencies (measured no faster, README "Live fusion"); routes whose
+ONNX Runtime and OpenVINO are not project dependencies (measured no faster, docs/fusion.md); routes whose
 package is missing are skipped. To measure them without touching the venv:
 ``pip install --target /tmp/routes onnxruntime openvino onnx flatbuffers protobuf openvino-telemetry`` and run
 with ``PYTHONPATH=$PYTHONPATH:/tmp/routes``.

@@ -64,7 +64,7 @@ SIM=$OUT/sim
 rm -rf "$SIM"
 matrix-tracker simulate --config complex --frames "$FRAMES" --seed 7 --image_ext .jpg --bag --compressed --out "$SIM"
 matrix-tracker info "$SIM" | grep -E "^(format|views|frames|people|camera_height_m)"
-# the same default checkpoint as on the real sample (README "The detector")
+# the same default checkpoint as on the real sample (docs/detector.md)
 live_graph simulated "$SIM/bag" "$SIM"
 
 echo "== simulated: the same checkpoint offline on the same frames, with the registration homographies"

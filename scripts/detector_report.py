@@ -1,7 +1,7 @@
-"""Report of the detector recipe (issue 15): every seed's checkpoint on held-out simulated test sequences and on
+"""Report of the detector recipe: every seed's checkpoint on held-out simulated test sequences and on
 the real MATRIX sample, as a table (stdout, ``report.md``), ``report.json`` and a PNG of real-frame heatmaps.
 
-Rows per checkpoint (see README "The detector" for the protocol):
+Rows per checkpoint (see docs/detector.md for the protocol):
   sim complex test  data/det_complex_test_s201 (simulator seed 201, 60 frames; test: never used for selection)
   sim modified test data/det_modified_test_s202 (seed 202, 60 frames; test)
   real, true calib  ../shared/matrix_sample frames 0-4 with the dataset's per-frame calibration (VALIDATION:

@@ -24,7 +24,7 @@ FRAMES = 6
 def test_simulated_sequences_meet_the_accuracy_limits(variant, tmp_path):
     # Each variant on its own floor (the random floor materials of the detector's training data are off:
     # on dark, little-textured floors at dusk the registration that guides the calibration finds too few
-    # ground features; README "Simulator" states the measured limitation). Light, camera effects and
+    # ground features; docs/calibration.md states the measured limitation). Light, camera effects and
     # distractors stay on.
     config = load_scene_config(variant)
     config.distractors.ground_variety = False

@@ -3,7 +3,7 @@ previous frame by optical flow, refined against the anchor, and stay as accurate
 registration; anchors come when due, on the first frame and after a frame the chain cannot follow.
 
 Error: against the stored calibrations (``homography_error_px``), full-resolution pixels. The 100-frame
-simulated figures: ``python scripts/bench_register.py --simulated --mode track`` (see README).
+simulated figures: ``python scripts/bench_register.py --simulated --mode track`` (docs/registration.md).
 """
 
 from dataclasses import replace

@@ -97,7 +97,7 @@ class Deployment:
         return next(h for h, nodes in self.hosts.items() if any(n.label == label for n in nodes))
 
     def describe(self) -> str:
-        """The layout as text (README, ``bench_distributed.py --layout``)."""
+        """The layout as text (docs/deployment.md, ``bench_distributed.py --layout``)."""
         lines = []
         for host, nodes in self.hosts.items():
             lines.append(f'{host}: ' + ', '.join(n.label for n in nodes))

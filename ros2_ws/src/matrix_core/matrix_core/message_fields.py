@@ -6,13 +6,14 @@ here, the core stays free of ROS). Writers return the fields as a dict of plain 
 caller builds its own message class from them (``CameraInfo(**fields)``). Every reader that can fail raises
 :class:`ConversionError` with a one-line reason.
 
-Conventions (README, "Conventions"):
+Conventions (docs/conventions.md):
     - ``sensor_msgs/CameraInfo``: ``k``, ``d`` the intrinsics and distortion, ``r`` identity and
       ``p = K [R | t]`` mapping homogeneous WORLD points to pixels (it carries the extrinsics).
     - ``sensor_msgs/Image``: bgr8 (written), bgr8 / rgb8 / mono8 / bgra8 / rgba8 (read) -> (H, W, 3) BGR uint8.
     - ``matrix_msgs/HomographyStamped``: the message form of
       :class:`~matrix_core.register.registration.Registration` (``h_cur_to_ref`` = ``ref_H_img``,
-      ``h_img_to_ground`` = ``ground_H_img``, row-major, all zeros and status ``failed: <reason>`` when failed).
+      ``h_img_to_ground`` = ``ground_H_img``, row-major, all zeros unless ``status`` is ``OK``; ``status`` the
+      :class:`~matrix_core.register.registration.RegistrationStatus` value, ``reason`` its message).
     - stamps: ``builtin_interfaces/Time`` <-> float seconds (exact to the nanosecond).
 """
 

@@ -1,6 +1,6 @@
 """What can be run of the paper's Table III (stationary datasets) here: Wildtrack and MultiviewX cannot be
 downloaded, but the real MultiviewX sample in ``../shared/multiviewx_sample`` (6 cameras, its README) can
-be read. Its images and annotation files do not correspond frame by frame (README), so no detection can
+be read. Its images and annotation files do not correspond frame by frame (its README), so no detection can
 be scored on it; what it does check is the reader's geometry: every annotated ground position, projected
 with the reader's camera, should land on the bottom centre of that person's annotated box."""
 

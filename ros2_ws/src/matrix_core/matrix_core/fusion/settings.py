@@ -5,13 +5,14 @@ from pathlib import Path
 
 from matrix_core import topics
 from matrix_core.datasets.matrix_conventions import MATRIX_AREA, MATRIX_VIEWS
+from matrix_core.device import DeviceSettings
 from matrix_core.tracking.settings import TrackerSettings
 
 INPUT_KINDS = ('homography', 'camera_info')
 IMAGE_KINDS = ('raw', 'compressed', 'both')
 
 
-# The default detector (README "The detector"): bev/configs/detector.yaml, seed 1, selected on validation.
+# The default detector (docs/detector.md): bev/configs/detector.yaml, seed 1, selected on validation.
 DEFAULT_CHECKPOINT = 'detector_seed1.pt'
 
 

@@ -158,7 +158,7 @@ class RegisterSettings:
         metadata={
             'help': "mode track: the refinement against the anchor runs on the image resized by this factor (0.5 = "
             '960x540 for 1920x1080; at least `scale`, which the flow step uses): corners located twice as '
-            'finely as at 480x270 doubt fewer chains and fit tighter (README "Refinement at 960x540")'
+            'finely as at 480x270 doubt fewer chains and fit tighter (docs/registration.md)'
         },
     )
     anchor_by_flow: bool = field(
