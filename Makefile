@@ -13,7 +13,7 @@ help:
 	@echo "make test-fast - every test but the DDS (ros), system and slow ones (under 3 minutes)"
 	@echo "make data   - check ../shared (MATRIX_SHARED), else fetch the public MATRIX sample, else say what to put where"
 	@echo "make demo   - replay the real MATRIX sample through ROS 2 and write pictures to out/demo"
-	@echo "make bench  - print the speed figures of every component (scripts/bench_*.py but the soak)"
+	@echo "make bench  - the speed figures of every component (scripts/bench_*.py but the soak) -> docs/benchmarks.md"
 	@echo "make build  - colcon build only"
 	@echo "make experiments       - the paper's experiments at full size (hours) -> \$$RESULTS (docs/RESULTS.md) + PNGs"
 	@echo "make experiments-standard - the size of docs/RESULTS.md (about 2.5 h, two steps at once) -> \$$RESULTS + docs/results/standard/"
@@ -43,9 +43,9 @@ demo:
 	$(MAKE) setup
 	$(IN_ENV) bash scripts/demo.sh
 
+# The soak (45 min) runs alone: python scripts/bench_soak.py
 bench: setup
-	$(IN_ENV) for b in scripts/bench_*.py; do [ "$$b" = scripts/bench_soak.py ] && continue; \
-	  echo "== $$b"; python "$$b" || exit 1; done   # the soak (45 min): python scripts/bench_soak.py
+	$(IN_ENV) python scripts/run_benchmarks.py
 
 experiments: setup
 	$(IN_ENV) matrix-tracker experiments --mode full --out out/experiments --report $(RESULTS)

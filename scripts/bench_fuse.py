@@ -67,7 +67,9 @@ class Feeder:
                     image = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
                 imgs[v] = image_to_msg(image) if raw else image_to_compressed(image)
                 H = np.linalg.inv(np.linalg.solve(big_H_small, dataset.camera(v, f).img_H_ground()))
-                homs[v] = HomographyStamped(status='ok', confidence=1.0, h_img_to_ground=(H / H[2, 2]).ravel().tolist())
+                homs[v] = HomographyStamped(
+                    status=HomographyStamped.OK, confidence=1.0, h_img_to_ground=(H / H[2, 2]).ravel().tolist()
+                )
             self.frames.append((imgs, homs))
 
     def _on_tracks(self, msg):

@@ -53,7 +53,9 @@ def main() -> int:
         frame = {}
         for v in dataset.views:
             H = np.linalg.inv(dataset.camera(v, f).img_H_ground())  # the message holds ground_H_img
-            geometry = HomographyStamped(status='ok', confidence=1.0, h_img_to_ground=(H / H[2, 2]).ravel().tolist())
+            geometry = HomographyStamped(
+                status=HomographyStamped.OK, confidence=1.0, h_img_to_ground=(H / H[2, 2]).ravel().tolist()
+            )
             data = dataset.image_path(v, f).read_bytes()
             frame[v] = (CompressedImage(format='jpeg', data=data), geometry)
         messages.append(frame)

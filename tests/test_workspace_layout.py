@@ -38,9 +38,12 @@ def test_interfaces_import_and_serialize():
     from rclpy.serialization import deserialize_message, serialize_message
     from matrix_msgs.msg import HomographyStamped, Track, TrackArray
 
-    msg = HomographyStamped(confidence=0.5, inliers=10, matches=20, status='ok', backend='sift')
+    msg = HomographyStamped(
+        confidence=0.5, inliers=10, matches=20, status=HomographyStamped.OK, reason='re-keyed', backend='sift'
+    )
     msg.h_cur_to_ref = [1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0]
     back = deserialize_message(serialize_message(msg), HomographyStamped)
-    assert list(back.h_cur_to_ref) == list(msg.h_cur_to_ref) and back.status == 'ok'
+    assert list(back.h_cur_to_ref) == list(msg.h_cur_to_ref)
+    assert (back.status, back.reason) == (HomographyStamped.OK, 're-keyed')
     tracks = TrackArray(tracks=[Track(id=4, score=0.9)])
     assert deserialize_message(serialize_message(tracks), TrackArray).tracks[0].id == 4

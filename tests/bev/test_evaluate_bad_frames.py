@@ -16,7 +16,7 @@ from matrix_core.cli.main import main
 from matrix_core.datasets import open_dataset
 from matrix_core.fusion.settings import shipped_checkpoint
 from matrix_core.register.file_frame import record_name, registration_to_record
-from matrix_core.register.registration import STATUS_OK, Registration
+from matrix_core.register.registration import Registration, RegistrationStatus
 
 CHECKPOINT = shipped_checkpoint()
 pytestmark = pytest.mark.slow
@@ -94,7 +94,12 @@ def _record(camera, ok=True) -> dict:
     """A registration record whose ground homography is that of ``camera`` (what a perfect register writes)."""
     return registration_to_record(
         Registration(
-            STATUS_OK, np.eye(3), np.linalg.inv(camera.img_H_ground()), confidence=1.0, matches=100, inliers=100
+            RegistrationStatus.OK,
+            np.eye(3),
+            np.linalg.inv(camera.img_H_ground()),
+            confidence=1.0,
+            matches=100,
+            inliers=100,
         )
     )
 

@@ -11,6 +11,7 @@ from matrix_core.evaluation.graph_report import (
     summary_table,
 )
 from matrix_core.geometry.camera import Camera
+from matrix_core.register.registration import RegistrationStatus
 
 
 @pytest.fixture(scope='module')
@@ -27,19 +28,28 @@ def _shifted(cam: Camera, dx: float) -> Camera:
 
 def test_perfect_estimates_score_zero_and_shifts_are_measured(ds):
     truth = ds.camera('D2', 1)
-    perfect = score_view_frame('D2', 1.5, truth, ds.area, truth, 'ok', 0.9, truth.ground_H_img())
+    perfect = score_view_frame('D2', 1.5, truth, ds.area, truth, RegistrationStatus.OK, 0.9, truth.ground_H_img())
     assert perfect.rot_err_deg == pytest.approx(0, abs=1e-3) and perfect.centre_err_m == pytest.approx(0, abs=1e-9)
     assert perfect.reg_ground_err_m == pytest.approx(0, abs=1e-6)
     moved = _shifted(truth, 0.3)
     # a camera moved by 0.3 m sees the ground shifted by 0.3 m: the homography error says so
     assert ground_homography_error_m(moved.ground_H_img(), truth, ds.area) == pytest.approx(0.3, abs=1e-6)
-    bad = score_view_frame('D2', 1.5, truth, ds.area, moved, 'failed: too few inliers', 0.1, None)
+    bad = score_view_frame('D2', 1.5, truth, ds.area, moved, RegistrationStatus.FAILED, 0.1, None, 'too few inliers')
     assert bad.centre_err_m == pytest.approx(0.3) and bad.reg_ground_err_m is None
 
 
 def test_summary_table_and_picture(ds):
     scores = [
-        score_view_frame(v, 1.0, ds.camera(v, 0), ds.area, ds.camera(v, 0), 'ok', 0.8, ds.camera(v, 0).ground_H_img())
+        score_view_frame(
+            v,
+            1.0,
+            ds.camera(v, 0),
+            ds.area,
+            ds.camera(v, 0),
+            RegistrationStatus.OK,
+            0.8,
+            ds.camera(v, 0).ground_H_img(),
+        )
         for v in ds.views[:3]
     ]
     scores.append(score_view_frame('D4', 1.0, ds.camera('D4', 0), ds.area))

@@ -15,7 +15,7 @@ from matrix_core.datasets import open_dataset
 from matrix_core.fusion.fuser import BevFuser
 from matrix_core.fusion.settings import FuseSettings, shipped_checkpoint
 from matrix_core.fusion.views import ViewInput, at_reduced_resolution, jpeg_reduction
-from matrix_core.register.registration import Registration, RegistrationError
+from matrix_core.register.registration import Registration, RegistrationError, RegistrationStatus
 
 torch.set_num_threads(1)
 FRAMES = 4
@@ -107,7 +107,9 @@ def test_registration_input_equals_offline(sequence, model):
     def from_registration(dataset, view, frame):
         H = np.linalg.inv(dataset.camera(view, frame).img_H_ground())
         return ViewInput(
-            dataset.load_image(view, frame), Registration('ok', None, H / H[2, 2]).img_H_ground, confidence=0.9
+            dataset.load_image(view, frame),
+            Registration(RegistrationStatus.OK, None, H / H[2, 2]).img_H_ground,
+            confidence=0.9,
         )
 
     _assert_same(_offline(sequence, model), _live(sequence, model, from_registration), 1e-4)
@@ -136,9 +138,9 @@ def test_bad_views_are_reported_not_used(sequence, model):
     assert 'image' in r.views['D1'].reason and 'homography' in r.views['D2'].reason
     assert r.available_views == ['D4', 'D5', 'D6', 'D7', 'D8'] and len(r.detections) > 0
     with pytest.raises(RegistrationError, match='NaN'):
-        Registration('ok', None, [np.nan] * 9).img_H_ground
+        Registration(RegistrationStatus.OK, None, [np.nan] * 9).img_H_ground
     with pytest.raises(RegistrationError, match='singular'):
-        Registration('ok', None, [0.0] * 9).img_H_ground
+        Registration(RegistrationStatus.OK, None, [0.0] * 9).img_H_ground
     # no usable view: no network run, no invented detections, the stream goes on
     empty = fuser.process(1.5, {})
     assert empty.heatmap is None and len(empty.detections) == 0 and 'temporal' in empty.resets
@@ -212,7 +214,7 @@ def test_inputs_made_on_arrival_give_the_same_frames(matrix_sample, model):
             ground_H_img = np.linalg.inv(dataset.camera(v, frame).img_H_ground())
             messages[v] = (
                 image_to_compressed(dataset.load_image(v, frame)),
-                registration_to_msg(Registration('ok', np.eye(3), ground_H_img, confidence=1.0)),
+                registration_to_msg(Registration(RegistrationStatus.OK, np.eye(3), ground_H_img, confidence=1.0)),
             )
             inputs[1].decode_early(v, messages[v][0])
         views = [{v: x.view_input(v, *m, 'homography') for v, m in messages.items()} for x in inputs]

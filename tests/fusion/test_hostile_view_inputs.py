@@ -12,7 +12,8 @@ from std_msgs.msg import Header
 from matrix_core.bev.data import prepare_image
 from matrix_core.datasets import MatrixDataset
 from matrix_core.fusion.view_inputs import EARLY_KEPT, NOT_SENT, ImageNotSent, ViewInputs
-from matrix_core.register.registration import Registration
+from matrix_core.fusion.views import FrameStatus
+from matrix_core.register.registration import Registration, RegistrationStatus
 from matrix_ros.conversions import camera_to_camera_info, image_to_compressed, image_to_msg, registration_to_msg
 
 
@@ -28,7 +29,9 @@ def _inputs():
 
 
 def _homography(camera, scale=1.0, values=None):
-    msg = registration_to_msg(Registration('ok', np.eye(3), np.linalg.inv(camera.img_H_ground()), confidence=0.9))
+    msg = registration_to_msg(
+        Registration(RegistrationStatus.OK, np.eye(3), np.linalg.inv(camera.img_H_ground()), confidence=0.9)
+    )
     h = np.array(msg.h_img_to_ground) * scale if values is None else np.asarray(values, float).ravel()
     msg.h_img_to_ground = h.tolist()
     return msg
@@ -53,7 +56,7 @@ def test_an_image_its_drone_did_not_send_makes_the_view_missing_saying_so(real):
     camera, _ = real
     for geometry in (_homography(camera), None):
         view = _inputs().view_input('D1', ImageNotSent(Header()), geometry, 'homography')
-        assert not view.usable and view.reason == NOT_SENT and view.reason.startswith('no image')
+        assert not view.usable and view.reason == NOT_SENT and view.status == FrameStatus.MISSING
 
 
 def test_a_frame_of_geometry_without_any_image_gives_no_views(real):

@@ -12,6 +12,7 @@ import pytest
 
 from matrix_core.datasets import MatrixDataset
 from matrix_core.register.evaluate import gt_cur_to_ref, homography_error_px
+from matrix_core.register.registration import RegistrationStatus
 from matrix_core.register.registrar import Registrar
 from matrix_core.register.settings import RegisterSettings
 
@@ -89,10 +90,10 @@ def test_an_image_without_features_fails_and_publishes_no_homography(matrix_samp
     registrar = Registrar(settings, dataset.reference_image('D1'), ref, dataset.area)
     blank = np.full((1080, 1920, 3), 128, np.uint8)
     r = registrar.register(blank, 0)
-    assert r.status == 'failed' and r.ref_H_img is None and r.ground_H_img is None
+    assert r.status == RegistrationStatus.FAILED and r.ref_H_img is None and r.ground_H_img is None
     assert r.matches == 0 and r.confidence == 0.0 and r.message
     small = registrar.register(blank[:540, :960], 1)
-    assert small.status == 'failed' and '960x540' in small.message
+    assert small.status == RegistrationStatus.FAILED and '960x540' in small.message
     # The registrar goes on working after failures.
     assert registrar.register(dataset.load_image('D1', 0), 2).ok
 

@@ -13,6 +13,7 @@ from matrix_core.geometry.homography import implied_camera
 from matrix_core.register.evaluate import gt_cur_to_ref, homography_error_px
 from matrix_core.register.fit import fit_homography
 from matrix_core.register.gate import check_registration, ground_polygon, shape_tolerance
+from matrix_core.register.registration import RegistrationStatus
 from matrix_core.register.ground_mask import visible_ground_grid
 from matrix_core.register.registrar import Registrar
 from matrix_core.register.settings import MATRIX_BLOCK, RegisterSettings
@@ -39,7 +40,7 @@ def test_gate_rejects_a_facade_fit_on_a_corner_drone(matrix_sample):
     assert error > 20.0, f'facade fit not reproduced (error {error:.1f} px)'
     assert ungated.confidence > 0.3 and ungated.inliers > 50
     gated, _ = _register(dataset, 'D7', 0, **FACADE)
-    assert gated.status == 'failed' and gated.message.startswith('gate:')
+    assert gated.status == RegistrationStatus.FAILED and gated.message.startswith('gate:')
     assert gated.ref_H_img is None and gated.ground_H_img is None
     # Even the loosest shape tolerance (a fit with only min_inliers inliers) rejects it.
     s = RegisterSettings()

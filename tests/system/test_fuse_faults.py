@@ -107,7 +107,7 @@ class Drones:
                     img.data = b'not a jpeg at all'
                 self.images[v].publish(img)
             H = np.linalg.inv(self.dataset.camera(v, frame).img_H_ground())
-            hom = HomographyStamped(header=header, status='ok', confidence=0.9)
+            hom = HomographyStamped(header=header, status=HomographyStamped.OK, confidence=0.9)
             hom.h_img_to_ground = (np.full(9, np.nan) if v in nan_homography else (H / H[2, 2]).ravel()).tolist()
             if homographies:
                 self.homs[v].publish(hom)

@@ -32,6 +32,7 @@ from matrix_core import topics
 from matrix_core.fusion.fuser import BevFuser
 from matrix_core.fusion.view_inputs import ImageNotSent, ViewInputs
 from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
+from matrix_core.fusion.views import FrameStatus
 from matrix_ros import fusion_messages as out
 from matrix_ros.connect import SubscribeWhenConnected
 from matrix_ros.image_outputs import ImageOutputs
@@ -148,12 +149,12 @@ class FuseNode(Node):
                 throttle_duration_sec=5.0,
             )
             return
-        for v in [v for v, view in views.items() if view.reason and not view.reason.startswith('no ')]:
+        for v in [v for v, view in views.items() if view.status == FrameStatus.REJECTED]:
             self.get_logger().error(f'{v}: not used for this frame: {views[v].reason}')
         result = self.fuser.process_safely(frame.stamp, views, decode_s=time.perf_counter() - t0)
-        failed = [st.reason for st in result.views.values() if st.reason.startswith('fusion failed')]
+        failed = [st.reason for st in result.views.values() if st.status == FrameStatus.FUSION_FAILED]
         if failed:
-            self.get_logger().error(f't={frame.stamp:.3f} s: {failed[0]}; publishing no detections')
+            self.get_logger().error(f't={frame.stamp:.3f} s: fusion failed: {failed[0]}; publishing no detections')
         self.last_fused = frame.stamp
         header = Header(stamp=seconds_to_stamp(frame.stamp), frame_id=s.world_frame)
         self.pubs['tracks'].publish(out.tracks_msg(header, result.tracks))

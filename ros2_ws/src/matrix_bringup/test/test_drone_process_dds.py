@@ -134,7 +134,7 @@ def test_drone_process_decodes_once_and_hands_the_registration_to_calib(matrix_s
     # calib on a thread of its own (thread_niceness, default 5): niced 5 more than the process's main thread
     assert niceness[drone.pid] + CalibNodeSettings().thread_niceness in niceness.values(), niceness
     for name in ('register/D3', 'calib/D3'):  # a corrupt JPEG: each node says so, the process goes on
-        assert diags[(name, 9.0)].level == DiagnosticStatus.ERROR and 'bad input' in diags[(name, 9.0)].message, out
+        assert diags[(name, 9.0)].level == DiagnosticStatus.ERROR and 'bad_input' in diags[(name, 9.0)].message, out
     separate = _separate_nodes(dataset, config, jpegs)
     for k, ((stamp, _), (registration, camera)) in enumerate(zip(jpegs, separate)):
         truth = dataset.camera(VIEW, dataset.frames[k])

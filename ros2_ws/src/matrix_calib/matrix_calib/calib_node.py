@@ -5,8 +5,9 @@ or ``V/image/compressed`` (``compressed``), optionally ``V/<intrinsics_topic>`` 
 with ``use_registration``, ``V/homography``: an image waits up to ``registration_wait_s`` for its registration,
 whose implied camera predicts the boards (else the image motion does). With register in one process
 (``matrix_ros.drone_link``; calib on its own thread) both come from register, the image decoded once. Publishes
-``V/camera_info`` (``p = K [R | t]``), ``V/pose``, a ``calib/V`` status per image on ``/diagnostics``, stamped as
-the image (stale: the last good pose, ``publish_stale``); bad input is reported, the node keeps running.
+``V/camera_info`` (``p = K [R | t]``), ``V/pose`` (also on ``/tf``: world -> the image's optical frame), a
+``calib/V`` status per image on ``/diagnostics``, stamped as the image (stale: the last good pose,
+``publish_stale``); bad input is reported, the node keeps running.
 """
 
 import time
@@ -167,7 +168,7 @@ class CalibNode(Node):
             result = self.calibrators[view].process(image, stamp_to_seconds(stamp), registration)
         except (ConversionError, ValueError) as exc:
             self.get_logger().error(f'{view}: image at {stamp_to_seconds(stamp):.3f} s skipped: {exc}')
-            self._diagnose(view, stamp, diagnostics.ERROR, f'bad input: {exc}', {'status': 'bad_input'})
+            self._diagnose(view, stamp, diagnostics.ERROR, f'bad_input: {exc}', {'status': 'bad_input'})
             return
         if result.camera is not None and (result.status == OK or self.settings.publish_stale):
             info_pub, pose_pub = self.pubs[view]

@@ -132,5 +132,5 @@ def test_calib_node_survives_bad_input(matrix_sample, node_executable):
     statuses = [d.status[0] for d in diags]
     assert len(statuses) == 3, statuses
     assert [s.level for s in statuses[:2]] == [DiagnosticStatus.ERROR] * 2
-    assert all(s.message.startswith('bad input') for s in statuses[:2]), statuses
+    assert all(s.message.startswith('bad_input') for s in statuses[:2]), statuses
     assert dict((kv.key, kv.value) for kv in statuses[2].values)['status'] != 'bad_input'

@@ -30,11 +30,11 @@ PLAN = [
 
 
 def _registration(header, dataset, frame, kind) -> HomographyStamped:
-    msg = HomographyStamped(header=header, status='ok', confidence=0.9)
+    msg = HomographyStamped(header=header, status=HomographyStamped.OK, confidence=0.9)
     H = np.linalg.inv(dataset.camera('D5', frame).img_H_ground())  # image pixels -> ground metres
     msg.h_img_to_ground = (np.full(9, np.nan) if kind == 'nan' else (H / H[2, 2]).ravel()).tolist()
     if kind == 'failed':
-        msg.status, msg.h_img_to_ground = 'failed: test', [0.0] * 9
+        msg.status, msg.reason, msg.h_img_to_ground = HomographyStamped.FAILED, 'test', [0.0] * 9
     return msg
 
 

@@ -23,14 +23,7 @@ import numpy as np
 from matrix_core.encoded_images import CorruptImage, decode_image
 from matrix_core.geometry.camera import Camera, pose_matrix
 from matrix_core.geometry.quaternion import matrix_from_quaternion, quaternion_from_matrix
-from matrix_core.register.registration import (
-    STATUS_FAILED,
-    STATUS_OK,
-    STATUS_UNUSABLE,
-    Registration,
-    RegistrationError,
-    check_homography,
-)
+from matrix_core.register.registration import Registration, RegistrationError, RegistrationStatus, check_homography
 
 
 class ConversionError(ValueError):
@@ -209,16 +202,17 @@ def registration_fields(registration: Registration) -> dict:
         'matches': int(r.matches),
         'inliers': int(r.inliers),
         'inlier_error_px': error,
-        'status': STATUS_OK if r.ok else f'{STATUS_FAILED}: {r.message}',
+        'status': int(r.status),
+        'reason': r.message,
         'reference_id': r.reference_id,
         'backend': r.backend,
     }
 
 
 def registration_from_msg(msg) -> Registration:
-    """matrix_msgs/HomographyStamped -> :class:`Registration`. A message that says ``ok`` but whose
-    ``h_img_to_ground`` breaks the validity rule comes back with status ``unusable`` saying why: consumers
-    never see NaN or zero matrices."""
+    """matrix_msgs/HomographyStamped -> :class:`Registration`. A message that says ``OK`` but whose
+    ``h_img_to_ground`` breaks the validity rule, or whose status is no known value, comes back with status
+    ``UNUSABLE`` saying why: consumers never see NaN or zero matrices."""
     values = {
         'confidence': float(msg.confidence),
         'matches': int(msg.matches),
@@ -227,15 +221,18 @@ def registration_from_msg(msg) -> Registration:
         'reference_id': msg.reference_id,
         'backend': msg.backend,
     }
-    if msg.status != STATUS_OK:
-        reason = msg.status.split(': ', 1)[1] if msg.status.startswith(f'{STATUS_FAILED}: ') else msg.status
-        return Registration.failed(reason, **values)
+    try:
+        status = RegistrationStatus(msg.status)
+    except ValueError:
+        return Registration(RegistrationStatus.UNUSABLE, message=f'unknown status {msg.status!r}', **values)
+    if status != RegistrationStatus.OK:
+        return Registration(status, message=msg.reason, **values)
     try:
         ground = check_homography(msg.h_img_to_ground, 'h_img_to_ground')
     except RegistrationError as exc:
-        return Registration(STATUS_UNUSABLE, message=str(exc), **values)
+        return Registration(RegistrationStatus.UNUSABLE, message=str(exc), **values)
     try:  # only the ground homography is the contract; a producer may leave the pixel one out (zeros)
         ref = check_homography(msg.h_cur_to_ref, 'h_cur_to_ref')
     except RegistrationError:
         ref = None
-    return Registration(STATUS_OK, ref, ground, **values)
+    return Registration(status, ref, ground, message=msg.reason, **values)

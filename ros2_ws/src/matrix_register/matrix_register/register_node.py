@@ -25,7 +25,7 @@ from matrix_core.datasets import MatrixDataset
 from matrix_core.register.backends import make_backend
 from matrix_core.register.reference_pairing import FAIL, HOLD, REFERENCE, ReferencePairing, stamp_text
 from matrix_core.register.registrar import Registrar
-from matrix_core.register.registration import Registration
+from matrix_core.register.registration import Registration, RegistrationStatus
 from matrix_core.register.scene import settings_for_dataset
 from matrix_core.register.warm_up import warm_up_once
 from matrix_register.settings import RegisterNodeSettings
@@ -108,7 +108,7 @@ class RegisterNode(Node):
             image = self.link.decode(msg)
         except (ConversionError, ValueError) as exc:
             self.link.image(view, msg, None)  # calib tries itself and reports the bad input
-            return self._publish(view, msg.header, Registration.failed(f'bad input: {exc}', backend=self.backend.name))
+            return self._publish(view, msg.header, Registration.bad_input(str(exc), backend=self.backend.name))
         self.link.image(view, msg, image)
         if view in self.registrars:
             self._register(view, msg, image)
@@ -148,7 +148,7 @@ class RegisterNode(Node):
             self._publish(
                 view,
                 msg.header,
-                Registration.failed(f'bad input: cannot make it the reference: {exc}', backend=self.backend.name),
+                Registration.bad_input(f'cannot make it the reference: {exc}', backend=self.backend.name),
             )
             return
         self.get_logger().info(f'{view}: reference is the image at {text} (its CameraInfo)')
@@ -159,7 +159,7 @@ class RegisterNode(Node):
         try:
             result = self.registrars[view].register(image, stamp_text(header_stamp_ns(msg.header)))
         except ValueError as exc:
-            return self._publish(view, msg.header, Registration.failed(f'bad input: {exc}', backend=self.backend.name))
+            return self._publish(view, msg.header, Registration.bad_input(str(exc), backend=self.backend.name))
         self._publish(view, msg.header, result, measured=True)
 
     def _publish(self, view: str, header, result: Registration, measured: bool = False) -> None:
@@ -167,12 +167,12 @@ class RegisterNode(Node):
         ``measured`` one, i.e. one the registrar computed)."""
         self.pubs[view].publish(out := registration_to_msg(result, header))
         self.link.registration(view, out)
-        bad_input = result.message.startswith('bad input')
+        bad_input = result.status == RegistrationStatus.BAD_INPUT
         if not result.ok:
             log = self.get_logger().error if bad_input else self.get_logger().warning
             log(f'{view}: image at {stamp_text(header_stamp_ns(header))} not registered: {result.message}')
         level = diagnostics.OK if result.ok else (diagnostics.ERROR if bad_input else diagnostics.WARN)
-        text = 'ok' if result.ok else f'failed: {result.message}'
+        text = f'{result.status}' if result.ok else f'{result.status}: {result.message}'
         values = (
             ()
             if not measured

@@ -67,15 +67,15 @@ def test_reference_from_camera_info_over_dds(matrix_sample, node_executable):
     assert sorted(got) == sorted([ORPHAN_S, REFERENCE_S, *FRAME_S]), f'homographies at {sorted(got)}; {log}'
     # The image without a CameraInfo is reported failed, with zero matrices, never used as the reference.
     orphan = got[ORPHAN_S]
-    assert orphan.status.startswith('failed:') and 'before the reference' in orphan.status, orphan.status
+    assert orphan.status == HomographyStamped.FAILED and 'before the reference' in orphan.reason, orphan
     assert not any(orphan.h_cur_to_ref)
     # The reference registers to itself.
     ref_msg = got[REFERENCE_S]
-    assert ref_msg.status == 'ok', ref_msg.status
+    assert ref_msg.status == HomographyStamped.OK, ref_msg
     np.testing.assert_allclose(np.array(ref_msg.h_cur_to_ref).reshape(3, 3), np.eye(3), atol=2e-3)
     for seconds, frame in FRAME_S.items():
         msg = got[seconds]
-        assert msg.status == 'ok', f'frame {frame}: {msg.status}'
+        assert msg.status == HomographyStamped.OK, f'frame {frame}: {msg.status} {msg.reason}'
         assert msg.reference_id == f'{VIEW}/frame/1.000000000'
         H = np.array(msg.h_cur_to_ref).reshape(3, 3)
         error = homography_error_px(H, dataset.camera(VIEW, frame), ref_cam, dataset.area, MATRIX_BLOCK)

@@ -68,7 +68,7 @@ def test_register_node_over_dds(matrix_sample, node_executable):
         bad.header.stamp.sec = 99
 
         def bad_reported():
-            return any(s.level == DiagnosticStatus.ERROR and 'bad input' in s.message for d in diags for s in d.status)
+            return any(s.level == DiagnosticStatus.ERROR and 'bad_input' in s.message for d in diags for s in d.status)
 
         deadline = time.monotonic() + 30.0  # sent again each second: the new publisher may not be matched yet
         while time.monotonic() < deadline and not bad_reported() and register.poll() is None:
@@ -94,10 +94,11 @@ def test_register_node_over_dds(matrix_sample, node_executable):
     assert bad_reported(), f'no diagnostics error for the corrupt image; {log}'
     assert 'too short' in register_out, log
     assert restarted and stamp_to_seconds(restarted[0].header.stamp) == 1.0, log
-    assert restarted[0].status == 'ok' and restarted[0].reference_id == f'{VIEWS[0]}/reference', restarted[0].status
+    assert restarted[0].status == HomographyStamped.OK and restarted[0].reference_id == f'{VIEWS[0]}/reference', log
     assert f'{VIEWS[0]}: t=1.000 s: time went back, starting this drone afresh' in register_out, log
     failed = [m for m in got[VIEWS[0]] if m.header.stamp.sec == 99]  # downstream learns of it too
-    assert failed and failed[0].status.startswith('failed: bad input') and not any(failed[0].h_img_to_ground), log
+    assert failed and failed[0].status == HomographyStamped.BAD_INPUT and not any(failed[0].h_img_to_ground), log
+    assert 'too short' in failed[0].reason, failed[0]
 
     for view in VIEWS:
         msgs = got[view]
@@ -107,7 +108,7 @@ def test_register_node_over_dds(matrix_sample, node_executable):
             index = round((stamp_to_seconds(msg.header.stamp) - 1.0) / 0.5)
             frame = dataset.frames[index]
             cur = dataset.camera(view, frame)
-            assert msg.status == 'ok', f'{view} frame {frame}: {msg.status}'
+            assert msg.status == HomographyStamped.OK, f'{view} frame {frame}: {msg.status} {msg.reason}'
             assert msg.backend == 'sift' and msg.reference_id == f'{view}/reference'
             assert msg.inliers >= 15 and 0.0 < msg.confidence <= 1.0
             assert msg.confidence == pytest.approx(msg.inliers / msg.matches)

@@ -133,7 +133,11 @@ def fuse_diagnostics(header, frame, result, wait_s: float, latency_s: float, lat
                 f'fuse/{view}',
                 diagnostics.OK if st.available else diagnostics.WARN,
                 'used' if st.available else f'missing: {st.reason}',
-                {'available': st.available, 'confidence': '' if st.confidence is None else f'{st.confidence:.3f}'},
+                {
+                    'available': st.available,
+                    'status': str(st.status),
+                    'confidence': '' if st.confidence is None else f'{st.confidence:.3f}',
+                },
                 view,
             )
         )

@@ -12,7 +12,7 @@ import numpy as np
 from matrix_core.calib.scene import CalibScene
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.geometry.camera import Camera, pose_matrix
-from matrix_core.register.registration import STATUS_FAILED, Registration, RegistrationError
+from matrix_core.register.registration import Registration, RegistrationError, RegistrationStatus
 
 # Stricter than register's gate (which only rejects fits to the facades): a guide must predict the boards'
 # corners within a few pixels, so a registration further from a rigid camera is not used to guide.
@@ -22,10 +22,11 @@ REGISTRATION_SHAPE_ERROR = 0.05
 def registered_camera(scene: CalibScene, registration: Registration = None) -> tuple:
     """(Camera or None, how): the rigid camera a :class:`Registration` of this image implies.
 
-    No registration, or one that register reported failed: (None, ''), the image motion guides silently (the
-    node logs the failure). A registration that is unusable (bad data) or not a rigid camera with the scene's
-    intrinsics: the camera is None and ``how`` says why (ending in '; ', it prefixes the note of the fallback)."""
-    if registration is None or registration.status == STATUS_FAILED:
+    No registration, or one that register reported failed or bad input: (None, ''), the image motion guides
+    silently (the node logs the failure). A registration that is unusable (bad data) or not a rigid camera with
+    the scene's intrinsics: the camera is None and ``how`` says why (ending in '; ', it prefixes the note of the
+    fallback)."""
+    if registration is None or registration.status in (RegistrationStatus.FAILED, RegistrationStatus.BAD_INPUT):
         return None, ''
     try:
         implied = registration.implied_camera(scene.K)

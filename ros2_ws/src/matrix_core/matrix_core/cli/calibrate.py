@@ -142,7 +142,7 @@ def _registration_of(registrations, view, frame) -> tuple:
     registration = read_registration(registrations, view, frame)
     if registration is None:
         return None, 'missing'
-    return registration, registration.status + (f': {registration.message}' if not registration.ok else '')
+    return registration, f'{registration.status}' + (f': {registration.message}' if not registration.ok else '')
 
 
 def _calibrate_frame(dataset, out, writer, calibrator, view, frame, stamp, registrations, write_stale, compare) -> dict:

@@ -40,7 +40,7 @@ from matrix_core.register.evaluate import homography_error_px
 from matrix_core.register.file_frame import record_name, registration_to_record
 from matrix_core.register.overlay import write_registration_overlay
 from matrix_core.register.registrar import Registrar
-from matrix_core.register.registration import STATUS_FAILED, Registration
+from matrix_core.register.registration import Registration, RegistrationStatus
 from matrix_core.register.scene import settings_for_dataset
 from matrix_core.register.settings import RegisterSettings
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
@@ -84,7 +84,7 @@ def _pair(view, frame, status, message, failure='', error=None, result=None) -> 
     return {
         'view': view,
         'frame': frame,
-        'status': status,
+        'status': str(status),
         'error_px': error,
         'confidence': result.confidence if result else None,
         'inliers': result.inliers if result else None,
@@ -104,8 +104,8 @@ def _register_frame(args, dataset, settings, view, frame, index, registrar, imag
     except Exception as exc:  # a bad frame (unreadable image, registration bug) must not end the batch
         reason = _failure('register', exc)
         failed = Registration.failed(reason, reference_id=registrar.reference_id, backend=registrar.backend.name)
-        return _pair(view, frame, STATUS_FAILED, reason, reason)
         atomic_write_text(out / name, json.dumps(registration_to_record(failed), indent=1))
+        return _pair(view, frame, RegistrationStatus.FAILED, reason, reason)
     atomic_write_text(out / name, json.dumps(registration_to_record(result), indent=1))
     failure, error = '', None
     if result.ok:
@@ -156,7 +156,7 @@ def run(args) -> int:
             except Exception as exc:  # one drone without a usable reference: its frames fail, the others run
                 reason = _failure('reference', exc)
                 tqdm.write(f'{view}: {reason}')
-                summary += [_pair(view, frame, STATUS_FAILED, reason, reason) for frame in frames]
+                summary += [_pair(view, frame, RegistrationStatus.FAILED, reason, reason) for frame in frames]
                 bar.update(len(frames))
                 continue
             for index, frame in enumerate(frames):

@@ -16,6 +16,7 @@ from matrix_core.calib.evaluation import pose_errors
 from matrix_core.geometry.camera import Camera
 from matrix_core.geometry.homography import apply_homography
 from matrix_core.register.ground_mask import visible_ground_grid
+from matrix_core.register.registration import RegistrationStatus
 
 
 @dataclass
@@ -26,7 +27,8 @@ class ViewFrameScore:
     stamp: float
     rot_err_deg: float = None
     centre_err_m: float = None
-    reg_status: str = None
+    reg_status: RegistrationStatus = None
+    reg_message: str = None
     reg_confidence: float = None
     reg_ground_err_m: float = None
 
@@ -47,15 +49,16 @@ def score_view_frame(
     truth: Camera,
     area,
     estimated: Camera = None,
-    reg_status: str = None,
+    reg_status: RegistrationStatus = None,
     reg_confidence: float = None,
     ground_H_img=None,
+    reg_message: str = None,
 ) -> ViewFrameScore:
     """Score what was published for ``view`` at ``stamp`` against the ``truth`` camera."""
-    score = ViewFrameScore(view, stamp, reg_status=reg_status, reg_confidence=reg_confidence)
+    score = ViewFrameScore(view, stamp, reg_status, reg_message=reg_message, reg_confidence=reg_confidence)
     if estimated is not None:
         score.rot_err_deg, score.centre_err_m = pose_errors(estimated, truth)
-    if reg_status == 'ok' and ground_H_img is not None:
+    if reg_status == RegistrationStatus.OK and ground_H_img is not None:
         score.reg_ground_err_m = ground_homography_error_m(ground_H_img, truth, area)
     return score
 
@@ -73,10 +76,11 @@ def summary_table(scores: list, views: list) -> str:
     )
     lines = [header, '-' * len(header)]
     for name, rows in [(v, [s for s in scores if s.view == v]) for v in views] + [('all', scores)]:
+        registered = sum(s.reg_status == RegistrationStatus.OK for s in rows)
         lines.append(
             f'{name:>5} {len(rows):>6} {sum(s.rot_err_deg is not None for s in rows):>5} '
             f'{_median([s.rot_err_deg for s in rows]):>8} {_median([s.centre_err_m for s in rows]):>8} '
-            f'{sum(s.reg_status == "ok" for s in rows):>6} {_median([s.reg_confidence for s in rows]):>6} '
+            f'{registered:>6} {_median([s.reg_confidence for s in rows]):>6} '
             f'{_median([s.reg_ground_err_m for s in rows]):>8}'
         )
     lines.append(
@@ -143,14 +147,13 @@ def score_registration(
     """:func:`score_view_frame` of a :class:`~matrix_core.register.registration.Registration` (or None)."""
     if registration is None:
         return score_view_frame(view, stamp, truth, area, estimated)
-    status = 'ok' if registration.ok else f'{registration.status}: {registration.message}'
     return score_view_frame(
         view,
         stamp,
         truth,
         area,
         estimated,
-        status,
+        registration.status,
         registration.confidence,
         registration.ground_H_img if registration.ok else None,
     )

@@ -14,7 +14,7 @@ from matrix_core.bev.data import prepare_image
 from matrix_core.bev.inference import SequenceRunner
 from matrix_core.bev.lifting import feat_H_grid
 from matrix_core.fusion.settings import FuseSettings
-from matrix_core.fusion.views import ViewInput, ViewInputError, check_image
+from matrix_core.fusion.views import FrameStatus, ViewInput, ViewInputError, check_image
 from matrix_core.tracking import BevDetections, BevTracker
 
 
@@ -35,12 +35,17 @@ class TrackState:
 
 @dataclass
 class ViewStatus:
-    """Whether a view took part in a frame; ``reason`` says why not; ``confidence`` of its homography."""
+    """Whether a view took part in a frame (:class:`FrameStatus`); ``reason`` says why not; ``confidence`` of
+    its homography."""
 
-    available: bool
+    status: FrameStatus
     reason: str = ''
     confidence: float = None
 
+
+    @property
+    def available(self) -> bool:
+        return self.status == FrameStatus.USED
 
 @dataclass
 class FuseResult:
@@ -157,18 +162,19 @@ class BevFuser:
         for i, name in enumerate(names):
             view = views.get(name)
             if view is None:
-                status[name] = ViewStatus(False, 'no message')
+                status[name] = ViewStatus(FrameStatus.MISSING, 'no message')
                 continue
             if not view.usable:
-                status[name] = ViewStatus(False, view.reason or 'image or homography missing', view.confidence)
+                why = view.status if view.status != FrameStatus.USED else FrameStatus.MISSING
+                status[name] = ViewStatus(why, view.reason or 'image or homography missing', view.confidence)
                 continue
             try:
                 images[i], fhs[i] = self._view_tensors(view)
             except ViewInputError as exc:
-                status[name] = ViewStatus(False, str(exc), view.confidence)
+                status[name] = ViewStatus(FrameStatus.REJECTED, str(exc), view.confidence)
                 continue
             mask[i] = True
-            status[name] = ViewStatus(True, '', view.confidence)
+            status[name] = ViewStatus(FrameStatus.USED, '', view.confidence)
         t1 = time.perf_counter()
         heatmap = None
         if mask.any():
@@ -194,7 +200,7 @@ class BevFuser:
 
     def process_safely(self, stamp: float, views: dict, decode_s: float = 0.0) -> FuseResult:
         """:meth:`process` for a live stream: an error of the network (e.g. non-finite output) gives a frame with
-        no detections, every view reported ``fusion failed: <why>`` (never invented detections), and the temporal
+        no detections, every view reported ``FUSION_FAILED`` saying why (never invented detections), and the temporal
         state restarts. ``decode_s`` (seconds spent building ``views``) is added to the timings."""
         t0 = time.perf_counter()
         try:
@@ -206,7 +212,7 @@ class BevFuser:
                 BevDetections(np.zeros((0, 2)), np.zeros(0)),
                 [],
                 None,
-                {v: ViewStatus(False, f'fusion failed: {exc}') for v in self.settings.views},
+                {v: ViewStatus(FrameStatus.FUSION_FAILED, str(exc)) for v in self.settings.views},
                 {'total_s': time.perf_counter() - t0},
                 ['temporal'],
             )

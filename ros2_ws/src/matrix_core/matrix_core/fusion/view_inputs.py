@@ -18,7 +18,14 @@ tracks. The first frame gains most: each view's first image is decoded and resiz
 from dataclasses import dataclass
 
 from matrix_core.bev.data import prepare_image
-from matrix_core.fusion.views import ViewInput, ViewInputError, at_reduced_resolution, check_image, jpeg_reduction
+from matrix_core.fusion.views import (
+    FrameStatus,
+    ViewInput,
+    ViewInputError,
+    at_reduced_resolution,
+    check_image,
+    jpeg_reduction,
+)
 from matrix_core.message_fields import (
     ConversionError,
     camera_from_camera_info,
@@ -26,7 +33,7 @@ from matrix_core.message_fields import (
     is_jpeg,
     registration_from_msg,
 )
-from matrix_core.register.registration import STATUS_FAILED, RegistrationError
+from matrix_core.register.registration import RegistrationError, RegistrationStatus
 
 
 NOT_SENT = 'no image: dropped at the sender (link budget)'
@@ -43,8 +50,8 @@ class ImageNotSent:
 
 def registration_ground(registration, min_confidence: float):
     """(3, 3) ``img_H_ground`` of a registration a view may use; :class:`ViewInputError` saying why not."""
-    if registration.status == STATUS_FAILED:
-        raise ViewInputError(f'registration {STATUS_FAILED}: {registration.message}')
+    if registration.status in (RegistrationStatus.FAILED, RegistrationStatus.BAD_INPUT):
+        raise ViewInputError(f'registration {registration.status}: {registration.message}')
     if registration.ok and registration.confidence < min_confidence:
         raise ViewInputError(f'registration confidence {registration.confidence:.2f} < {min_confidence}')
     try:
@@ -107,13 +114,14 @@ class ViewInputs:
         """One view's :class:`ViewInput`; any problem becomes its reason. ``geometry_name`` names the missing
         geometry in that reason (e.g. 'homography')."""
         if isinstance(image_msg, ImageNotSent):
-            return ViewInput(reason=NOT_SENT)
+            return ViewInput(reason=NOT_SENT, status=FrameStatus.MISSING)
         _, early, network_image = self._early.pop(id(image_msg), (None, None, None))
         self._deferred.pop(id(image_msg), None)  # its frame came before its deferred decode: decoded below
         if image_msg is None or geometry_msg is None:
             return ViewInput(
                 reason='no '
-                + ' and no '.join(p for p, x in (('image', image_msg), (geometry_name, geometry_msg)) if x is None)
+                + ' and no '.join(p for p, x in (('image', image_msg), (geometry_name, geometry_msg)) if x is None),
+                status=FrameStatus.MISSING,
             )
         confidence, camera_size = None, None
         try:
@@ -129,7 +137,7 @@ class ViewInputs:
                 # its homography is for other pixels: lifting would put the features in the wrong cells
                 raise ViewInputError('image is {}x{}, its camera_info is for {}x{}'.format(*full, *camera_size))
         except (ViewInputError, ConversionError) as exc:
-            return ViewInput(reason=str(exc), confidence=confidence)
+            return ViewInput(reason=str(exc), confidence=confidence, status=FrameStatus.REJECTED)
         return ViewInput(
             image,
             img_H_ground if r == 1 else at_reduced_resolution(img_H_ground, r),

@@ -18,17 +18,34 @@ class ViewInputError(ValueError):
 
 
 @dataclass
+class FrameStatus(enum.IntEnum):
+    """What became of one view in one fused frame (its ``reason`` says more)."""
+
+    USED = 0
+    MISSING = 1  # not all of it arrived: no image, no geometry, dropped at the sender; expected under load
+    REJECTED = 2  # it arrived but cannot be used: bad input, failed or unusable registration, low confidence
+    FUSION_FAILED = 3  # the network failed on the frame: no view is used, no detection invented
+
+    def __str__(self) -> str:
+        return self.name.lower()
+
+    def __format__(self, spec: str) -> str:
+        return format(str(self), spec)
+
+
 class ViewInput:
     """What arrived for one view of a frame.
 
     Attributes:
         image: (H, W, 3) BGR uint8, or None when missing/undecodable.
         img_H_ground: (3, 3) ground metres -> pixels, or None.
-        reason: why the view is missing ('' when both parts are there).
+        reason: why the view cannot be used ('' when both parts are there).
         confidence: registration confidence of the homography (None for a calibration).
         network_image: (3, h, w) float32 network input made from ``image`` when it arrived
             (``ViewInputs.decode_early``), or None: the fuser makes it.
     """
+        status: :attr:`FrameStatus.MISSING` or ``REJECTED`` when the view cannot be used (default: ``REJECTED``
+            when a ``reason`` is given, else ``USED``).
 
     image: np.ndarray = None
     img_H_ground: np.ndarray = None
@@ -36,9 +53,19 @@ class ViewInput:
     confidence: float = None
     network_image: np.ndarray = None
 
+    status: FrameStatus = None
+
+    def __post_init__(self):
+        if self.status is None:
+            self.status = FrameStatus.REJECTED if self.reason else FrameStatus.USED
     @property
     def usable(self) -> bool:
-        return self.image is not None and self.img_H_ground is not None and not self.reason
+        return (
+            self.status == FrameStatus.USED
+            and self.image is not None
+            and self.img_H_ground is not None
+            and not self.reason
+        )
 
 
 def check_image(image) -> np.ndarray:

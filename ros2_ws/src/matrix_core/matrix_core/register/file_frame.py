@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from matrix_core.datasets import matrix_conventions as conv
-from matrix_core.register.registration import STATUS_OK, Registration, RegistrationError, check_homography
+from matrix_core.register.registration import Registration, RegistrationError, RegistrationStatus, check_homography
 
 
 BROKEN_RECORD = ('unusable record', 'unreadable record')  # how a record file that cannot be used is reported
@@ -71,8 +71,12 @@ def registration_from_record(record: dict, where: str = 'record') -> Registratio
     }
     error = record.get('inlier_error_px')
     values['inlier_error_px'] = float('nan') if error is None else float(error)
-    if record.get('status') != STATUS_OK:
-        return Registration.failed(record.get('message', '') or f'{where}: status {record.get("status")!r}', **values)
+    if record.get('status') != str(RegistrationStatus.OK):
+        try:
+            status = RegistrationStatus.from_name(record.get('status'))
+        except ValueError as exc:
+            return Registration.failed(f'{where}: {exc}', **values)
+        return Registration(status, message=record.get('message', '') or f'{where}: status {status}', **values)
     try:
         ground = check_homography(
             conv.ground_homography_from_file(
@@ -84,7 +88,9 @@ def registration_from_record(record: dict, where: str = 'record') -> Registratio
         ref = np.linalg.inv(pix) @ check_homography(record.get('H_cur_to_ref'), f'{where}: H_cur_to_ref') @ pix
     except (RegistrationError, TypeError) as exc:
         return Registration.failed(f'{BROKEN_RECORD[0]}: {exc}', **values)
-    return Registration(STATUS_OK, _normalised(ref), _normalised(ground), message=record.get('message', ''), **values)
+    return Registration(
+        RegistrationStatus.OK, _normalised(ref), _normalised(ground), message=record.get('message', ''), **values
+    )
 
 
 def read_registration(folder, view: str, frame: int):

@@ -30,7 +30,7 @@ from matrix_core.register.ground_mask import ground_mask
 from matrix_core.register.matching import match_symmetric
 from matrix_core.register.reference import Reference
 from matrix_core.register.search_region import predicted_region
-from matrix_core.register.registration import STATUS_FAILED, STATUS_OK, Registration
+from matrix_core.register.registration import Registration, RegistrationStatus
 from matrix_core.register.settings import RegisterSettings
 
 # Mode track, anchor_by_flow: after this many anchors by flow failed in a row, only due anchors try it (on
@@ -120,7 +120,7 @@ class Registrar:
         if (w, h) != (cam.width, cam.height):
             self._track = None
             return self._result(
-                STATUS_FAILED,
+                RegistrationStatus.FAILED,
                 None,
                 0,
                 0,
@@ -228,7 +228,7 @@ class Registrar:
         self._track = TrackState(anchor, images, step.corners, step.anchor_H_cur, steps, step.prev_H_cur)
         return (
             self._result(
-                STATUS_OK,
+                RegistrationStatus.OK,
                 H,
                 step.tracked,
                 step.inliers,
@@ -288,7 +288,9 @@ class Registrar:
         if reason:
             return None, reason
         self._previous_center, self._frames_since_good = implied.center, 1
-        result = self._result(STATUS_OK, H, step.tracked, step.inliers, step.error_px, start, '', None, implied)
+        result = self._result(
+            RegistrationStatus.OK, H, step.tracked, step.inliers, step.error_px, start, '', None, implied
+        )
         self._anchor(images, result, frame_id)
         return result, ''
 
@@ -313,7 +315,9 @@ class Registrar:
         a live image the reference. It does not seed the gate's previous camera centre: the reference may be
         from another time than the frames that follow."""
         n = len(self.reference.features)
-        return self._result(STATUS_OK, np.eye(3), n, n, 0.0, time.perf_counter(), 'this image is the reference')
+        return self._result(
+            RegistrationStatus.OK, np.eye(3), n, n, 0.0, time.perf_counter(), 'this image is the reference'
+        )
 
     def _weak(self, result: Registration) -> bool:
         return not result.ok or result.confidence < self.settings.rekey_confidence
@@ -357,10 +361,16 @@ class Registrar:
         matches, inliers = len(pairs), int(fit.inliers.sum())
         args = (matches, inliers, fit.error_px, start)
         if fit.H is None:
-            return self._result(STATUS_FAILED, None, matches, 0, float('nan'), start, fit.reason, reference_id)
+            return self._result(
+                RegistrationStatus.FAILED, None, matches, 0, float('nan'), start, fit.reason, reference_id
+            )
         if inliers < s.min_inliers:
             return self._result(
-                STATUS_FAILED, None, *args, f'only {inliers} inliers (min_inliers {s.min_inliers})', reference_id
+                RegistrationStatus.FAILED,
+                None,
+                *args,
+                f'only {inliers} inliers (min_inliers {s.min_inliers})',
+                reference_id,
             )
         reason, implied = check_registration(
             fit.H,
@@ -378,8 +388,8 @@ class Registrar:
             s.gate_shape_inliers,
         )
         if reason:
-            return self._result(STATUS_FAILED, None, *args, reason, reference_id)
-        return self._result(STATUS_OK, fit.H, *args, '', reference_id, implied)
+            return self._result(RegistrationStatus.FAILED, None, *args, reason, reference_id)
+        return self._result(RegistrationStatus.OK, fit.H, *args, '', reference_id, implied)
 
     def _result(
         self, status, H, matches, inliers, error_px, start, message='', reference_id=None, implied=None

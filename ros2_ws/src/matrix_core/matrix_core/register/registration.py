@@ -11,10 +11,10 @@ Convention (``a_H_b`` maps frame ``b`` to ``a``; pixels are full-resolution, Ope
     ``ground_H_img`` (3, 3): current-image pixels -> world ground metres (x, y on z = 0),
     ``ground_H_img = ref_camera.ground_H_img() @ ref_H_img``; both normalised so that H[2, 2] = 1.
 
-Validity, one rule: a registration is usable when its status is ``ok`` and ``ground_H_img`` is a finite,
+Validity, one rule: a registration is usable when its status is ``OK`` and ``ground_H_img`` is a finite,
 non-singular 3x3 matrix (:func:`check_homography`). A failed registration carries no matrices (None), never
-NaN or zero sentinels; its ``message`` says why. A registration read from a message or file that said ``ok``
-but breaks the rule has status ``unusable`` (register did not fail; the data is bad).
+NaN or zero sentinels; its ``message`` says why. A registration read from a message or file that said ``OK``
+but breaks the rule has status ``UNUSABLE`` (register did not fail; the data is bad).
 """
 
 from dataclasses import dataclass, field
@@ -23,9 +23,31 @@ import numpy as np
 
 from matrix_core.geometry.homography import ImpliedCamera, implied_camera
 
-STATUS_OK = 'ok'
-STATUS_FAILED = 'failed'  # register could not register the frame (message: why)
-STATUS_UNUSABLE = 'unusable'  # it said ok, but what arrived breaks the validity rule (message: why)
+
+class RegistrationStatus(enum.IntEnum):
+    """What one registration says. The values are ``matrix_msgs/HomographyStamped``'s status constants; the
+    lower-case names are the file form (``to_dict``) and what logs and diagnostics print."""
+
+    OK = 0
+    FAILED = 1  # register could not register the frame: too few inliers, no fit, rejected by the gate (message: why)
+    BAD_INPUT = 2  # the image, or what should become the reference, could not be used at all (message: why)
+    UNUSABLE = 3  # it said OK, but what arrived breaks the validity rule (message: why)
+
+    def __str__(self) -> str:
+        return self.name.lower()
+
+    def __format__(self, spec: str) -> str:
+        return format(str(self), spec)
+
+    @classmethod
+    def from_name(cls, name: str) -> 'RegistrationStatus':
+        """The status whose lower-case name is ``name`` (the file form); ValueError naming the valid ones."""
+        try:
+            return cls[str(name).upper()]
+        except KeyError:
+            raise ValueError(f'unknown registration status {name!r}; one of {", ".join(map(str, cls))}') from None
+
+
 # Below this reciprocal condition number a homography is numerically singular (its inverse would invent geometry).
 MIN_RCOND = 1e-12
 
@@ -53,7 +75,7 @@ class Registration:
     """Registration of one current image to its drone's reference image.
 
     Attributes:
-        status: ``ok`` or ``failed`` (too few inliers, no fit, rejected by the sanity gate, bad input).
+        status: :class:`RegistrationStatus` (``OK``, or why not).
         ref_H_img: (3, 3) current pixels -> reference pixels, or None unless ok.
         ground_H_img: (3, 3) current pixels -> ground metres, or None unless ok.
         confidence: inliers / matches (0 without matches).
@@ -67,7 +89,7 @@ class Registration:
             gate computed it (None when not computed yet: :meth:`implied_camera` computes it once).
     """
 
-    status: str
+    status: RegistrationStatus
     ref_H_img: np.ndarray = None
     ground_H_img: np.ndarray = None
     confidence: float = 0.0
@@ -84,7 +106,12 @@ class Registration:
     @classmethod
     def failed(cls, reason: str, **values) -> 'Registration':
         """A failed registration (no matrices) saying ``reason``."""
-        return cls(STATUS_FAILED, message=reason, **values)
+        return cls(RegistrationStatus.FAILED, message=reason, **values)
+
+    @classmethod
+    def bad_input(cls, reason: str, **values) -> 'Registration':
+        """A registration of input that could not be used at all (no matrices), saying ``reason``."""
+        return cls(RegistrationStatus.BAD_INPUT, message=reason, **values)
 
     @classmethod
     def from_img_H_ground(cls, img_H_ground, **values) -> 'Registration':
@@ -93,12 +120,12 @@ class Registration:
         try:
             ground_H_img = np.linalg.inv(check_homography(img_H_ground, 'img_H_ground'))
         except RegistrationError as exc:
-            return cls(STATUS_UNUSABLE, message=str(exc), **values)
-        return cls(STATUS_OK, None, ground_H_img / ground_H_img[2, 2], **values)
+            return cls(RegistrationStatus.UNUSABLE, message=str(exc), **values)
+        return cls(RegistrationStatus.OK, None, ground_H_img / ground_H_img[2, 2], **values)
 
     @property
     def ok(self) -> bool:
-        return self.status == STATUS_OK
+        return self.status == RegistrationStatus.OK
 
     @property
     def implied_center(self):
@@ -132,7 +159,7 @@ class Registration:
             return None if v is None or not np.isfinite(v) else float(v)
 
         return {
-            'status': self.status,
+            'status': str(self.status),
             'confidence': float(self.confidence),
             'matches': int(self.matches),
             'inliers': int(self.inliers),
