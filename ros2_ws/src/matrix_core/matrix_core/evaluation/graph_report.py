@@ -156,6 +156,7 @@ def score_registration(
         registration.status,
         registration.confidence,
         registration.ground_H_img if registration.ok else None,
+        registration.message,
     )
 
 

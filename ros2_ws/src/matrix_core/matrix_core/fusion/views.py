@@ -6,6 +6,7 @@ the sign). It comes from a registration (``Registration.img_H_ground``) or a cal
 (``Camera.img_H_ground()``): ``fusion.view_inputs`` builds views from either message.
 """
 
+import enum
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,7 +18,6 @@ class ViewInputError(ValueError):
     """A view's input cannot be used for this frame; the message is the reason shown in diagnostics."""
 
 
-@dataclass
 class FrameStatus(enum.IntEnum):
     """What became of one view in one fused frame (its ``reason`` says more)."""
 
@@ -33,6 +33,7 @@ class FrameStatus(enum.IntEnum):
         return format(str(self), spec)
 
 
+@dataclass
 class ViewInput:
     """What arrived for one view of a frame.
 
@@ -43,21 +44,21 @@ class ViewInput:
         confidence: registration confidence of the homography (None for a calibration).
         network_image: (3, h, w) float32 network input made from ``image`` when it arrived
             (``ViewInputs.decode_early``), or None: the fuser makes it.
-    """
         status: :attr:`FrameStatus.MISSING` or ``REJECTED`` when the view cannot be used (default: ``REJECTED``
             when a ``reason`` is given, else ``USED``).
+    """
 
     image: np.ndarray = None
     img_H_ground: np.ndarray = None
     reason: str = ''
     confidence: float = None
     network_image: np.ndarray = None
-
     status: FrameStatus = None
 
     def __post_init__(self):
         if self.status is None:
             self.status = FrameStatus.REJECTED if self.reason else FrameStatus.USED
+
     @property
     def usable(self) -> bool:
         return (

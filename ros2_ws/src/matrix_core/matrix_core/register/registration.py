@@ -17,6 +17,7 @@ NaN or zero sentinels; its ``message`` says why. A registration read from a mess
 but breaks the rule has status ``UNUSABLE`` (register did not fail; the data is bad).
 """
 
+import enum
 from dataclasses import dataclass, field
 
 import numpy as np
