@@ -3,11 +3,6 @@
     matrix-tracker bag ../shared/matrix_sample --out bags/matrix_sample      # write
     matrix-tracker bag bags/matrix_sample                                     # list topics and counts
 
-Writing refuses an ``--out`` that is, contains or lies inside the source folder, and an existing ``--out``.
-An image that cannot be read or is cut short ends the run with its name, and no bag is left at ``--out``
-(the bag is written under a temporary name and moved there when complete): a bag is the whole sequence or
-nothing, as its frame ``i`` is the folder's ``i``-th frame.
-
 A damaged bag (cut short, overwritten, left by a killed writer) is listed with the messages before the
 damage, then the reason, and exit code 1.
 
