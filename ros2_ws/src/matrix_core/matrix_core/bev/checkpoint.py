@@ -7,15 +7,13 @@ import torch
 
 from matrix_core.bev.registry import build_model
 from matrix_core.bev.settings import BevSettings
+from matrix_core.output_paths import atomic_path
 
 
 def save_checkpoint(path, model, settings: BevSettings, **extra) -> None:
     """Write ``{'model', 'settings', **extra}`` atomically (a temp file then rename)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(path.suffix + '.tmp')
-    torch.save({'model': model.state_dict(), 'settings': dataclasses.asdict(settings), **extra}, tmp)
-    tmp.replace(path)
+    with atomic_path(path) as tmp:
+        torch.save({'model': model.state_dict(), 'settings': dataclasses.asdict(settings), **extra}, tmp)
 
 
 def load_checkpoint(path, map_location='cpu') -> dict:

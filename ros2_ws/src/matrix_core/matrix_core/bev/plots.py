@@ -3,6 +3,7 @@
 from pathlib import Path
 
 import numpy as np
+from matrix_core.output_paths import atomic_path
 
 
 def _plt():
@@ -30,9 +31,8 @@ def save_heatmap_png(path, heatmap: np.ndarray, grid, gt_xy: np.ndarray, det_xy:
     ax.set_ylabel('y (m)')
     ax.set_title(title)
     ax.legend(loc='upper right', fontsize=7)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, bbox_inches='tight')
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, bbox_inches='tight')
     plt.close(fig)
     return path
 
@@ -56,8 +56,7 @@ def save_trajectories_png(path, gt, tracks, grid, title: str = '') -> Path:
         ax.set_xlabel('x (m)')
     axes[0].set_ylabel('y (m)')
     fig.suptitle(title)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, bbox_inches='tight')
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, bbox_inches='tight')
     plt.close(fig)
     return path

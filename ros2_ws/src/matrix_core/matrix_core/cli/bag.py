@@ -3,6 +3,11 @@
     matrix-tracker bag ../shared/matrix_sample --out bags/matrix_sample      # write
     matrix-tracker bag bags/matrix_sample                                     # list topics and counts
 
+Writing refuses an ``--out`` that is, contains or lies inside the source folder, and an existing ``--out``.
+An image that cannot be read or is cut short ends the run with its name, and no bag is left at ``--out``
+(the bag is written under a temporary name and moved there when complete): a bag is the whole sequence or
+nothing, as its frame ``i`` is the folder's ``i``-th frame.
+
 A damaged bag (cut short, overwritten, left by a killed writer) is listed with the messages before the
 damage, then the reason, and exit code 1.
 
@@ -15,6 +20,7 @@ from pathlib import Path
 from matrix_core.bags import write_sequence_bag
 from matrix_core.bags.salvage import topic_counts
 from matrix_core.datasets import MatrixDataset
+from matrix_core.output_paths import atomic_folder, check_output
 
 
 def add_parser(subparsers) -> None:
@@ -34,10 +40,15 @@ def run(args) -> int:
     if not args.out:
         raise ValueError('--out BAG is required to write a bag (or give a bag folder to list it)')
     out = Path(args.out)
+    check_output(out, [source])
     if out.exists():
         raise FileExistsError(f'{out} exists; rosbag2 writes a new folder')
-    path = write_sequence_bag(MatrixDataset(source), out, compressed=args.compressed)
-    print(f'wrote {path}')
+    dataset = MatrixDataset(source)
+    # written under a temporary name and moved to --out when every frame is in it: a bad image (named in the
+    # error) or an interrupted run leaves no bag that a player or `bag` listing could take for the sequence
+    with atomic_folder(out) as partial:
+        write_sequence_bag(dataset, partial, compressed=args.compressed)
+    print(f'wrote {out}')
     return 0
 
 

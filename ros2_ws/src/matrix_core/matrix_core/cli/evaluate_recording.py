@@ -20,6 +20,15 @@ track ids of /tracks in the same frame; ``--boxes-2d`` writes them as ``frame,id
 import json
 from pathlib import Path
 
+from matrix_core.cli.argument_types import (
+    check_frame_range,
+    fraction,
+    non_negative_float,
+    non_negative_int,
+    positive_float,
+)
+from matrix_core.output_paths import add_overwrite_argument, atomic_path, atomic_write_text, check_output
+
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
@@ -31,8 +40,10 @@ def add_parser(subparsers) -> None:
     p.add_argument(
         '--detections-topic', default='/detections', help='TrackArray topic of the detections (default: /detections)'
     )
-    p.add_argument('--start-time', type=float, help='stamp of frame 0, seconds (default: the sequence bag\'s)')
-    p.add_argument('--frame-period', type=float, help='seconds between frames (default: the sequence bag\'s)')
+    p.add_argument(
+        '--start-time', type=non_negative_float, help='stamp of frame 0, seconds (default: the sequence bag\'s)'
+    )
+    p.add_argument('--frame-period', type=positive_float, help='seconds between frames (default: the sequence bag\'s)')
     p.add_argument(
         '--area',
         type=float,
@@ -40,16 +51,19 @@ def add_parser(subparsers) -> None:
         metavar=('X0', 'Y0', 'X1', 'Y1'),
         help='ground truth outside is ignored (default: the recorded heatmap grid, else none)',
     )
-    p.add_argument('--frames', type=int, nargs=2, metavar=('FIRST', 'LAST'), help='frame range (inclusive)')
-    p.add_argument('--threshold', type=float, default=0.5, help='detection match distance, m (default: 0.5)')
-    p.add_argument('--gate', type=float, default=1.0, help='tracking match distance, m (default: 1.0)')
+    p.add_argument(
+        '--frames', type=non_negative_int, nargs=2, metavar=('FIRST', 'LAST'), help='frame range (inclusive)'
+    )
+    p.add_argument('--threshold', type=positive_float, default=0.5, help='detection match distance, m (default: 0.5)')
+    p.add_argument('--gate', type=positive_float, default=1.0, help='tracking match distance, m (default: 1.0)')
     p.add_argument('--dataset', help='MATRIX folder of the sequence (annotated boxes): score /Dn/detections_2d')
-    p.add_argument('--iou', type=float, default=0.5, help='image-plane match threshold (default: 0.5)')
+    p.add_argument('--iou', type=fraction, default=0.5, help='image-plane match threshold (default: 0.5)')
     p.add_argument('--boxes-2d', help='with --dataset: write the recorded 2D boxes to this text file')
     p.add_argument('--png-2d', help='with --dataset: draw the middle frame of every drone into this PNG')
     p.add_argument('--overlays', help='with --dataset: write the recorded overlay images of that frame here')
     p.add_argument('--json', help='also write the metrics to this JSON file')
     p.add_argument('--png', help='also draw the tracks and the ground-truth trajectories into this PNG')
+    add_overwrite_argument(p)
     p.set_defaults(func=run)
 
 
@@ -58,8 +72,7 @@ def run(args) -> int:
     from matrix_core.evaluation.recording import ground_truth_from_bag, read_recording, score_recording
     from matrix_core.metrics.report import format_metrics
 
-    if args.frame_period is not None and args.frame_period <= 0:
-        raise ValueError('--frame-period must be positive')
+    _check_paths(args)
     clock = read_sequence_clock(args.ground_truth).overridden(args.start_time, args.frame_period)
     recording = (
         read_recording(
@@ -84,7 +97,8 @@ def run(args) -> int:
         _draw(args.png, result, args.area or recording.area, args.recording)
     image_plane = _image_plane(args, clock, recording) if args.dataset else None
     if args.json:
-        Path(args.json).write_text(
+        atomic_write_text(
+            args.json,
             json.dumps(
                 {
                     'detection': result.detection.as_dict(),
@@ -94,9 +108,30 @@ def run(args) -> int:
                     'image_plane': image_plane,
                 },
                 indent=2,
-            )
+            ),
         )
     return 0
+
+
+def _check_paths(args) -> None:
+    """Before any work: every output is new or empty (or ``--overwrite``) and none is, contains or lies inside
+    an input; the inputs exist; the 2D outputs come with --dataset; the frame range is a range."""
+    check_frame_range(args.frames)
+    for flag, path in (
+        ('recording', args.recording),
+        ('--ground-truth', args.ground_truth),
+        ('--dataset', args.dataset),
+    ):
+        if path is not None and not Path(path).exists():
+            raise FileNotFoundError(f'{flag} {path}: no such file or folder')
+    two_d = {'--boxes-2d': args.boxes_2d, '--png-2d': args.png_2d, '--overlays': args.overlays}
+    if not args.dataset and any(two_d.values()):
+        raise ValueError(f'{", ".join(f for f, v in two_d.items() if v)} need --dataset')
+    inputs = [args.recording, args.ground_truth, args.dataset]
+    outputs = {'--json': args.json, '--png': args.png, **two_d}
+    for flag, path in outputs.items():
+        if path:
+            check_output(path, inputs, args.overwrite, flag)
 
 
 def _image_plane(args, clock, recording) -> dict:
@@ -166,7 +201,8 @@ def _write_overlays(args, clock, frame: int) -> None:
     overlays = read_recorded_overlays(args.recording, clock, frame)
     Path(args.overlays).mkdir(parents=True, exist_ok=True)
     for view, image in overlays.items():
-        cv2.imwrite(str(Path(args.overlays) / f'overlay_{view}.png'), image)
+        with atomic_path(Path(args.overlays) / f'overlay_{view}.png') as tmp:
+            cv2.imwrite(str(tmp), image)
     print(
         f'wrote {len(overlays)} overlay images of frame {frame} to {args.overlays}/'
         if overlays

@@ -68,11 +68,19 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    """Run one subcommand; its exit code. Bad input (a usage error, a missing or malformed file, an output
+    that would overwrite an input) is one line on stderr and code 2, never a traceback."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse printed the usage error (or --help): its code, also when called in-process
+        return exc.code if isinstance(exc.code, int) else 2
     try:
         return int(args.func(args) or 0)
-    except (DatasetError, FileNotFoundError, FileExistsError, ValueError) as exc:
+    except (DatasetError, FileNotFoundError, FileExistsError, NotADirectoryError, ValueError) as exc:
+        print(f'matrix-tracker {args.command}: error: {exc}', file=sys.stderr)
+        return 2
+    except OSError as exc:  # unreadable input or unwritable output (permissions, disk full): named, no traceback
         print(f'matrix-tracker {args.command}: error: {exc}', file=sys.stderr)
         return 2
 

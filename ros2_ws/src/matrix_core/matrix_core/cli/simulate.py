@@ -1,5 +1,6 @@
 """``matrix-tracker simulate``: generate a seeded MATRIX-like sequence (folder + optional rosbag2)."""
 
+from matrix_core.output_paths import check_output
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 from matrix_core.sim.settings import SimulateSettings
 
@@ -18,6 +19,7 @@ def run(args) -> int:
     from matrix_core.sim.sequence import SUMMARY_FILE, simulate
 
     settings = settings_from_namespace(SimulateSettings, args)
+    check_output(settings.out, [settings.replay])  # before any work: never into the replayed folder
     out = simulate(settings)
     summary = json.loads((out / SUMMARY_FILE).read_text())
     print(

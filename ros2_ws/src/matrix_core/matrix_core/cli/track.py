@@ -8,6 +8,7 @@ missing between the first and the last are processed as frames without detection
 import numpy as np
 
 from matrix_core.metrics import BevPoints, read_bev_points, write_bev_points
+from matrix_core.output_paths import add_overwrite_argument, check_output
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 from matrix_core.tracking import BevDetections, BevTracker, TrackerSettings
 
@@ -17,7 +18,8 @@ def add_parser(subparsers) -> None:
         'track', help='track BEV detections ("frame x y score") into "frame id x y"', description=__doc__
     )
     p.add_argument('detections', help='text file, lines "frame x y [score]"')
-    p.add_argument('--out', required=True, help='output text file, lines "frame id x y"')
+    p.add_argument('--out', required=True, help='output text file, lines "frame id x y" (new or empty)')
+    add_overwrite_argument(p)
     add_settings_arguments(p, TrackerSettings)
     p.set_defaults(func=run)
 
@@ -38,6 +40,7 @@ def track_points(dets: BevPoints, settings: TrackerSettings) -> BevPoints:
 
 
 def run(args) -> int:
+    check_output(args.out, [args.detections], args.overwrite)
     dets = read_bev_points(args.detections, with_ids=False)
     tracks = track_points(dets, settings_from_namespace(TrackerSettings, args))
     write_bev_points(args.out, tracks)

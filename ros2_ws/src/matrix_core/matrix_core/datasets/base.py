@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 
 from matrix_core.datasets.types import DatasetError
+from matrix_core.encoded_images import CorruptImage, decode_image
 from matrix_core.geometry.camera import Camera
 
 IMAGE_EXTENSIONS = ('.png', '.jpg', '.jpeg')
@@ -39,11 +40,13 @@ def numbered_stems(folder: Path, suffixes=IMAGE_EXTENSIONS) -> list:
 
 
 def read_image(path) -> np.ndarray:
-    """(H, W, 3) uint8 BGR image of a file; :class:`DatasetError` naming the file if it cannot be decoded."""
-    img = cv2.imread(str(path), cv2.IMREAD_COLOR)
-    if img is None:
-        raise DatasetError(f'cannot decode image {path}')
-    return img
+    """(H, W, 3) uint8 BGR image of a file; :class:`DatasetError` naming the file if it cannot be read, is cut
+    short (``matrix_core.encoded_images``: a decoder alone takes half a JPEG for an image) or cannot be
+    decoded."""
+    try:
+        return decode_image(Path(path).read_bytes(), cv2.IMREAD_COLOR)
+    except (OSError, CorruptImage) as exc:
+        raise DatasetError(f'cannot decode image {path}: {exc}') from exc
 
 
 class MultiviewDataset(ABC):
@@ -78,7 +81,10 @@ class MultiviewDataset(ABC):
         return list(views) or list(self.views)
 
     def select_frames(self, max_frames: int = 0) -> list:
-        """The first ``max_frames`` frames (all when 0)."""
+        """The first ``max_frames`` frames (all when 0); :class:`DatasetError` for a negative count (never a
+        Python slice from the end)."""
+        if max_frames < 0:
+            raise DatasetError(f'max_frames must be >= 0 (0 = all), got {max_frames}')
         return list(self.frames)[: max_frames or None]
 
     @abstractmethod

@@ -1,5 +1,6 @@
 """Writer of the MATRIX folder format, the exact inverse of :mod:`matrix_reader` (used by the simulator
-and by the calibration CLI). All file-convention conversions go through ``matrix_conventions``."""
+and by the calibration CLI). All file-convention conversions go through ``matrix_conventions``. Every file
+is written under a temporary name and moved into place when complete (``output_paths``)."""
 
 import json
 from pathlib import Path
@@ -11,11 +12,11 @@ from matrix_core.datasets import matrix_conventions as conv
 from matrix_core.datasets.matrix_reader import META_FILE
 from matrix_core.datasets.opencv_xml import write_matrices
 from matrix_core.geometry.camera import Camera
+from matrix_core.output_paths import atomic_path, atomic_write_text
 
 
 def _write_table(path: Path, rows, fmt: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(''.join(fmt % tuple(r) + '\n' for r in rows) + '\n')
+    atomic_write_text(path, ''.join(fmt % tuple(r) + '\n' for r in rows) + '\n')
 
 
 class MatrixWriter:
@@ -38,15 +39,15 @@ class MatrixWriter:
         if area is not None:
             meta['area_file_xy'] = conv.area_to_file(area)
         meta.update(extra_meta or {})
-        (self.root / META_FILE).write_text(json.dumps(meta, indent=2, sort_keys=True) + '\n')
+        atomic_write_text(self.root / META_FILE, json.dumps(meta, indent=2, sort_keys=True) + '\n')
 
     def write_image(self, view: str, frame: int, image: np.ndarray, reference: bool = False) -> Path:
         """Write a (H, W, 3) BGR uint8 image of ``view`` at ``frame`` (or the view's reference image)."""
         base = self.root / 'reference' if reference else self.root
         path = base / 'image_subsets' / view / f'{frame:04d}{self.image_ext}'
-        path.parent.mkdir(parents=True, exist_ok=True)
-        if not cv2.imwrite(str(path), image):
-            raise OSError(f'cannot write image {path}')
+        with atomic_path(path) as tmp:
+            if not cv2.imwrite(str(tmp), image):
+                raise OSError(f'cannot write image {path}')
         return path
 
     def write_camera(self, view: str, frame: int, camera: Camera, reference: bool = False) -> None:
@@ -75,8 +76,7 @@ class MatrixWriter:
                 view_entries.append({'viewNum': conv.drone_number(view) - 1, **fields})
             entries.append({'personID': int(p.person_id), 'positionID': int(p.position_id), 'views': view_entries})
         path = self.root / 'annotations_positions' / f'{frame:04d}.json'
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(entries, indent=4) + '\n')
+        atomic_write_text(path, json.dumps(entries, indent=4) + '\n')
 
     def _pedestrian_rows(self, positions: dict) -> list:
         rows = []

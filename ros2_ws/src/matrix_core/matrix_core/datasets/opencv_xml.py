@@ -6,6 +6,7 @@ import cv2
 import numpy as np
 
 from matrix_core.datasets.types import DatasetError
+from matrix_core.output_paths import atomic_path
 
 
 def read_matrices(path: Path, names, optional=()) -> dict:
@@ -52,11 +53,10 @@ def read_matrices(path: Path, names, optional=()) -> dict:
 
 def write_matrices(path: Path, matrices: dict) -> None:
     """Write named float64 matrices to an OpenCV FileStorage XML file (creating parent folders)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
-    try:
-        for name, mat in matrices.items():
-            fs.write(name, np.asarray(mat, dtype=np.float64))
-    finally:
-        fs.release()
+    with atomic_path(path) as tmp:  # a reader never finds half a calibration file
+        fs = cv2.FileStorage(str(tmp), cv2.FILE_STORAGE_WRITE)
+        try:
+            for name, mat in matrices.items():
+                fs.write(name, np.asarray(mat, dtype=np.float64))
+        finally:
+            fs.release()

@@ -25,6 +25,7 @@ from matrix_core.fusion.image_boxes import (
 )
 from matrix_core.message_fields import image_from_msg
 from matrix_core.metrics.image_boxes import FrameBoxes, per_view_metrics
+from matrix_core.output_paths import atomic_path
 
 
 @dataclass
@@ -194,4 +195,6 @@ def draw_frame_png(path, images: dict, pred: FrameBoxes, gt: FrameBoxes, frame: 
         bar = np.zeros((50, mosaic.shape[1], 3), np.uint8)
         cv2.putText(bar, title, (10, 35), cv2.FONT_HERSHEY_SIMPLEX, 1.0, (255, 255, 255), 2)
         mosaic = np.vstack([bar, mosaic])
-    cv2.imwrite(str(path), mosaic)
+    with atomic_path(path) as tmp:
+        if not cv2.imwrite(str(tmp), mosaic):
+            raise OSError(f'cannot write {path}')

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from matrix_core.output_paths import atomic_write_text
 
 
 @dataclass(frozen=True)
@@ -130,5 +131,4 @@ def write_bev_points(path, points: BevPoints) -> None:
             lines.append(f'{points.frames[i]} {points.ids[i]} {x:.4f} {y:.4f}')
         else:
             lines.append(f'{points.frames[i]} {x:.4f} {y:.4f} {points.scores[i]:.4f}')
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    Path(path).write_text(''.join(line + '\n' for line in lines))
+    atomic_write_text(path, ''.join(line + '\n' for line in lines))

@@ -19,6 +19,7 @@ import numpy as np
 
 from matrix_core.metrics.bev_points import rows_by_frame
 from matrix_core.metrics.tracking import TrackingMetrics, tracking_metrics
+from matrix_core.output_paths import atomic_write_text
 
 
 @dataclass(frozen=True)
@@ -139,8 +140,7 @@ def write_mot_boxes(path, boxes: FrameBoxes) -> None:
             f'{boxes.frames[i]},{boxes.ids[i]},{x0:.2f},{y0:.2f},{x1 - x0:.2f},{y1 - y0:.2f},'
             f'{boxes.scores[i]:.4f},{boxes.views[i]}'
         )
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    Path(path).write_text(''.join(line + '\n' for line in lines))
+    atomic_write_text(path, ''.join(line + '\n' for line in lines))
 
 
 def read_mot_boxes(path) -> FrameBoxes:

@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 
 from matrix_core.geometry.camera import Camera
+from matrix_core.output_paths import atomic_path
 
 
 def _scaling(s: float) -> np.ndarray:
@@ -83,7 +84,7 @@ def registration_overlay(
 def write_registration_overlay(path, *args, **kwargs) -> Path:
     """:func:`registration_overlay` written as a PNG to ``path`` (folders created); returns the path."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if not cv2.imwrite(str(path), registration_overlay(*args, **kwargs)):
-        raise OSError(f'cannot write {path}')
+    with atomic_path(path) as tmp:
+        if not cv2.imwrite(str(tmp), registration_overlay(*args, **kwargs)):
+            raise OSError(f'cannot write {path}')
     return path
