@@ -30,7 +30,6 @@ def add_parser(subparsers) -> None:
         help='which checkpoint --export writes: the last epoch, or best.pt (highest validation score '
         'val_score: the model-selection protocol of the shipped default, docs/detector.md)',
     )
-    add_settings_arguments(p, DeviceSettings)
     p.set_defaults(func=run)
 
 

@@ -5,7 +5,6 @@ from pathlib import Path
 
 from matrix_core import topics
 from matrix_core.datasets.matrix_conventions import MATRIX_AREA, MATRIX_VIEWS
-from matrix_core.device import DeviceSettings
 from matrix_core.tracking.settings import TrackerSettings
 
 INPUT_KINDS = ('homography', 'camera_info')
