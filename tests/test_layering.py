@@ -1,8 +1,10 @@
 """The joins between packages stay as designed (docs/ARCHITECTURE.md): thin nodes, one home per concept.
 
 - a node package imports no other node package, and the calib node nothing from ``matrix_core.fusion``;
-- every concept that crosses a package boundary has one implementation: these tests grep for the forms
-  the old copies took and name the one module that may hold each.
+- every topic the graph wires (one host or deployed over hosts) is one ``matrix_core.topics`` defines, with
+  the type it gives: the graph is built by ``matrix_bringup.graph`` and its topics looked up there;
+- every other concept that crosses a package boundary has one implementation: these tests grep for the forms
+  a second copy would take and name the one module that may hold each.
 """
 
 import re

@@ -147,5 +147,5 @@ def test_lighting_ranges_and_dusk():
     dusk = sample_lighting(LightingConfig(dusk=[1.0, 1.0]), rng)
     day = sample_lighting(LightingConfig(dusk=[0.0, 0.0]), rng)
     assert sum(dusk.sky) < 0.6 * sum(day.sky)
-    # the plain light keeps the old box shading: 0.55 + 0.45 max(0, n . sun)
+    # the plain light keeps the plain scene's box shading: 0.55 + 0.45 max(0, n . sun)
     assert np.allclose(DAY.color([100, 100, 100], UP), 100 * (0.55 + 0.45 * DAY.direction[2]))

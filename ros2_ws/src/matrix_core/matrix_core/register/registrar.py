@@ -347,7 +347,7 @@ class Registrar:
         """Match ``cur`` to ``target`` (whose pixels map to the reference's by ``target_to_ref``), fit, gate."""
         s = self.settings
         cam = self.reference.camera
-        cv2.setRNGSeed(s.seed)  # OpenCV's global RNG, seeded per registration (as before the seeded RANSAC)
+        cv2.setRNGSeed(s.seed)  # OpenCV's global RNG, seeded per registration: the same frames, the same fit
         pairs = match_symmetric(cur.desc, target.desc, s.ratio, s.matcher)
         # Fit in reference pixels, so that the inlier threshold is in full-resolution reference pixels.
         dst = (
