@@ -1,7 +1,9 @@
 """``matrix-tracker site check``: a summary of a good site, one line naming file and key for a bad one."""
 
+import re
 import subprocess
 import sys
+from pathlib import Path
 
 import yaml
 
@@ -52,3 +54,9 @@ def test_bad_file_is_one_line_and_exit_2(tmp_path):
 def test_no_such_site_names_the_shipped_ones(capsys):
     assert main(['site', 'check', 'nowhere']) == 2
     assert 'site file not found: nowhere (a path, or a shipped site: matrix, plaza)' in capsys.readouterr().err
+
+
+def test_the_docs_example_is_the_shipped_plaza():
+    page = (Path(__file__).resolve().parents[2] / 'docs' / 'site-file.md').read_text()
+    example = re.search(r'```yaml\n(.*?)```', page, flags=re.S).group(1)
+    assert yaml.safe_load(example) == yaml.safe_load((SITES_DIR / 'plaza.yaml').read_text())
