@@ -158,7 +158,8 @@ def test_full_graph_replays_the_frames_before_a_bag_is_cut(small_bag, tmp_path):
 
 @pytest.mark.slow
 def test_node_launch_files_on_the_real_sample(matrix_sample):
-    """The three node launch files of docs/running-the-graph.md, one drone: images in, camera_info and homography out."""
+    """The three node launch files of docs/running-the-graph.md, one drone: images in, camera_info and
+    homography out."""
     sample = f'dataset:={matrix_sample}'
     launches = [
         ros_helpers.start_ros2(

@@ -467,9 +467,10 @@ class Report:
         self.add(
             '## 6. Real data: the default model through the live graph',
             'The shipped default detector (the one checkpoint of the fuse node, `make demo` and the headline '
-            'figures of the README), not a model trained by this run, on the real MATRIX sample (`../shared/matrix_sample`, '
-            'real images and annotations): the sample becomes a rosbag2 and `run_graph` replays it in lockstep '
-            'through every node (per-drone calib + register, fuse, recorder), exactly the path of `make demo`; '
+            'figures of the README), not a model trained by this run, on the real MATRIX sample '
+            '(`../shared/matrix_sample`, real images and annotations): the sample becomes a rosbag2 and '
+            '`run_graph` replays it in lockstep through every node (per-drone calib + register, fuse, recorder), '
+            'exactly the path of `make demo`; '
             'the recording is scored against the bag\'s ground truth. **These frames are the real validation set '
             'on which the default model was selected (docs/detector.md): no test accuracy.** Percent.',
             table(['checkpoint', 'frames'] + list(DETAIL), [row]),
