@@ -45,7 +45,7 @@ class FuseNode(Node):
     def __init__(self, defaults: FuseNodeSettings):
         super().__init__('fuse')
         self.settings = s = declare_settings(self, FuseNodeSettings, defaults, live=LIVE_PARAMETERS)
-        self.fuser = BevFuser(s)
+        self.fuser = BevFuser(s, log=self.get_logger().info)  # device auto: its choice in the log
         warm_up_s = self.fuser.warm_up()  # before subscribing: the first frame would pay for the network's kernels
         self.inputs, self.frames_published = (
             ViewInputs(self.fuser.input_size, s.min_confidence, s.jpeg_reduced_decode),

@@ -104,7 +104,7 @@ def heatmap_centroid(scores: torch.Tensor, rows: torch.Tensor, cols: torch.Tenso
     """(N, 2) (dcol, drow) in cells: score-weighted centroid of the 3x3 cells around each (row, col) of the
     (R, Q) ``scores``, relative to that cell (cells outside the grid weigh 0)."""
     padded = F.pad(scores[None, None], (1, 1, 1, 1))[0, 0]
-    d = torch.arange(-1, 2)
+    d = torch.arange(-1, 2, device=scores.device)
     r = rows[:, None, None] + 1 + d[None, :, None]  # (N, 3, 1) padded row indices
     c = cols[:, None, None] + 1 + d[None, None, :]  # (N, 1, 3)
     w = padded[r, c]  # (N, 3, 3)

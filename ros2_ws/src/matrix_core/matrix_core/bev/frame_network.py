@@ -27,6 +27,7 @@ from torch import nn
 from torch.nn.utils.fusion import fuse_conv_bn_eval
 
 from matrix_core.bev.lifting import lifting_taps
+from matrix_core.device import model_device
 
 CL = torch.channels_last
 
@@ -69,6 +70,10 @@ class FrameNetwork:
     Call with one frame: ``images`` (V, 3, h, w), ``feat_H_grid`` (V, 3, 3), ``view_mask`` (V,) bool and
     ``previous``, the last frame's :class:`FrameResult` or its carry (1, C, R, Q), or None -> :class:`FrameResult`.
     No gradients.
+
+    It runs on the model's device (:attr:`device`): the images of the views present are copied there once per
+    frame (no copy on the CPU), the sampling taps are computed there, and every output stays there.
+    ``feat_H_grid`` and ``view_mask`` may stay on the CPU (3x3 numbers a view: the keys of the taps' cache).
     """
 
     def __init__(self, model, grid_shape: tuple):
@@ -79,6 +84,7 @@ class FrameNetwork:
                 'its pooling relies on them'
             )
         self.grid_shape, self.stride = tuple(grid_shape), model.stride
+        self.device = model_device(model)
         # channels_last: on one core the encoder measured 1.15x and the aggregation up to 1.8x faster than on
         # NCHW tensors; elsewhere no clear difference on this shared machine (scripts/bench_routes.py)
         self.encoder = fold_batch_norms(model.encoder).to(memory_format=CL)
@@ -95,9 +101,9 @@ class FrameNetwork:
                 'previous': w[:, c : 2 * c].contiguous(memory_format=CL),
                 'bias': first.bias.detach(),
                 # the flag channel (1 with a previous frame) through the zero-padded convolution: fixed per grid
-                'flag': F.conv2d(torch.ones(1, 1, *self.grid_shape), w[:, 2 * c :], padding=first.padding).contiguous(
-                    memory_format=CL
-                ),
+                'flag': F.conv2d(
+                    torch.ones(1, 1, *self.grid_shape, device=w.device), w[:, 2 * c :], padding=first.padding
+                ).contiguous(memory_format=CL),
                 'rest': convs[1:],
             }
 
@@ -108,10 +114,13 @@ class FrameNetwork:
         rows, cols = self.grid_shape
         if views:
             present = images if len(views) == n_views else images[views]  # no copy when every view is there
-            feats = self.encoder(present.contiguous(memory_format=CL))
+            feats = self.encoder(present.to(self.device).contiguous(memory_format=CL))
             pooled = self._lift_and_pool(feats, self._taps_of(views, feat_H_grid, feats.shape[-2:]), n_views)
         else:
-            pooled = images.new_zeros(1, 2 * self.encoder.out_channels + 1, rows, cols).contiguous(memory_format=CL)
+            pooled = torch.zeros(
+                1, 2 * self.encoder.out_channels + 1, rows, cols, dtype=images.dtype, device=self.device
+            )
+            pooled = pooled.contiguous(memory_format=CL)
         aggregated = self.aggregate(pooled)
         if self.temporal is None:
             return FrameResult(self._heatmap(aggregated), aggregated, aggregated)
@@ -150,19 +159,21 @@ class FrameNetwork:
         first calls of each convolution build its kernels (measured ~0.1 s more on one core over the first two
         frames), which a live graph's first frames should not pay. Nothing is kept (outputs, sampling taps)."""
         w, h = image_size
-        images, mask = torch.zeros(n_views, 3, h, w), torch.ones(n_views, dtype=torch.bool)
+        images, mask = torch.zeros(n_views, 3, h, w, device=self.device), torch.ones(n_views, dtype=torch.bool)
         identity = torch.eye(3).repeat(n_views, 1, 1)  # any finite warp: the grid's cells see the image's
         first = self(images, identity, mask)
-        self.heads_at(self(images, identity, mask, first.carry).fused, torch.tensor([0]), torch.tensor([0]), True)
+        cell = torch.zeros(1, dtype=torch.long, device=self.device)
+        self.heads_at(self(images, identity, mask, first.carry).fused, cell, cell, True)
         self._taps.clear()
 
     def _taps_of(self, views: list, feat_H_grid, feat_size) -> list:
         """Each view's (index, weight, seen) of :func:`lifting_taps`, kept while its feat_H_grid stays the same (a
         static camera: computed once; the changed ones in one call)."""
-        keys = {v: feat_H_grid[v].numpy().tobytes() for v in views}
+        keys = {v: feat_H_grid[v].cpu().numpy().tobytes() for v in views}
         changed = [v for v in views if self._taps.get(v, (None,))[0] != keys[v]]
         if changed:
-            for v, *taps in zip(changed, *lifting_taps(feat_H_grid[changed], feat_size, self.grid_shape)):
+            fh = feat_H_grid[changed].to(self.device)
+            for v, *taps in zip(changed, *lifting_taps(fh, feat_size, self.grid_shape)):
                 self._taps[v] = (keys[v], *taps)
         return [self._taps[v][1:] for v in views]
 
@@ -196,7 +207,7 @@ class FrameNetwork:
         """(tracking (N, 2), offset (N, 2) or None) of the heads at the (N,) cells ``rows``, ``cols`` of
         ``fused`` (1, C, R, Q): each head's 3x3 convolution on the cell's zero-padded 3x3 neighbourhood."""
         padded = F.pad(fused[0], (1, 1, 1, 1))
-        d = torch.arange(3)
+        d = torch.arange(3, device=fused.device)
         patches = padded[:, rows[:, None, None] + d[None, :, None], cols[:, None, None] + d[None, None, :]]
         patches = patches.permute(1, 0, 2, 3).reshape(len(rows), padded.shape[0] * 9)  # (N, C*3*3) as the weight
 

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from matrix_core.bev.decode import find_peaks, peak_detections
+from matrix_core.bev.decode import Peaks, find_peaks, peak_detections
 from matrix_core.bev.frame_network import FrameNetwork
 
 
@@ -23,6 +23,9 @@ class SequenceRunner:
     :class:`~matrix_core.bev.frame_network.FrameNetwork` (its outputs, less work; a snapshot of its weights).
 
     ``reset()`` forgets the previous frame (start of a new sequence or after a gap in the stream).
+
+    The network and the peak finding run on the model's device; what leaves it per frame is the (R, Q) score map
+    and the peaks' cells and head values (decoded to metres on the CPU).
     """
 
     def __init__(self, model, settings, grid):
@@ -46,7 +49,8 @@ class SequenceRunner:
         self.previous = out if s.temporal else None  # its carry computed on demand (or by prepare_next)
         peaks = find_peaks(out.heatmap, self.grid, s.score_threshold, s.nms_radius_m, s.max_detections)
         tracking, offset = self.network.heads_at(out.fused, peaks.rows, peaks.cols, offset=s.subcell == 'offset')
-        dets = peak_detections(peaks, self.grid, tracking, offset, s.subcell)
+        peaks = Peaks(peaks.scores.cpu(), peaks.rows.cpu(), peaks.cols.cpu(), peaks.score.cpu())  # CPU: no copy
+        dets = peak_detections(peaks, self.grid, tracking.cpu(), None if offset is None else offset.cpu(), s.subcell)
         return FrameOutput(frame, dets, peaks.scores.numpy())
 
 

@@ -54,7 +54,8 @@ def _feature_points(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tup
     h, w = feat_size
     rows, cols = grid_shape
     dt = feat_H_grid.dtype if feat_H_grid.is_floating_point() else torch.float32
-    r, c = torch.meshgrid(torch.arange(rows, dtype=dt), torch.arange(cols, dtype=dt), indexing='ij')
+    at = {'dtype': dt, 'device': feat_H_grid.device}
+    r, c = torch.meshgrid(torch.arange(rows, **at), torch.arange(cols, **at), indexing='ij')
     cells = torch.stack([c, r, torch.ones_like(c)], dim=-1).reshape(1, -1, 3)  # (1, R*C, 3)
     uvw = cells @ feat_H_grid.to(dt).transpose(1, 2)  # (N, R*C, 3)
     depth = uvw[..., 2]
@@ -106,7 +107,8 @@ def lifting_taps(feat_H_grid: torch.Tensor, feat_size: tuple, grid_shape: tuple)
     wx0, wx1 = (1 - fx) * (x0 >= 0), fx * (x0 <= w - 2)
     wy0, wy1 = (1 - fy) * (y0 >= 0) * seen, fy * (y0 <= h - 2) * seen
     weight = torch.stack([wx0 * wy0, wx1 * wy0, wx0 * wy1, wx1 * wy1], dim=-1)
-    index = ((y0 * w + x0).long().unsqueeze(-1) + torch.tensor([0, 1, w, w + 1])).clamp_(0, h * w - 1)
+    corners = torch.tensor([0, 1, w, w + 1], device=u.device)
+    index = ((y0 * w + x0).long().unsqueeze(-1) + corners).clamp_(0, h * w - 1)
     return index, weight, seen
 
 

@@ -17,6 +17,7 @@ from matrix_core.bev.data import BevFrames
 from matrix_core.bev.evaluation import evaluate
 from matrix_core.bev.losses import bev_loss
 from matrix_core.bev.registry import build_model
+from matrix_core.device import DEFAULT_DEVICE, model_device, resolve_device
 from matrix_core.output_paths import atomic_write_text
 
 TARGET_KEYS = ('heatmap', 'offset', 'tracking', 'center_mask', 'tracking_mask')
@@ -82,13 +83,18 @@ def learning_rate(config: TrainConfig, step: int, total_steps: int) -> float:
     return low + 0.5 * (config.lr - low) * (1.0 + np.cos(np.pi * t))
 
 
-def _batch(items: list) -> dict:
-    return {k: torch.stack([it[k] for it in items]) for k in items[0] if isinstance(items[0][k], torch.Tensor)}
+def _batch(items: list, device) -> dict:
+    """The tensors of ``items`` stacked and on ``device`` (on the CPU: no copy)."""
+    return {
+        k: torch.stack([it[k] for it in items]).to(device) for k in items[0] if isinstance(items[0][k], torch.Tensor)
+    }
 
 
 def training_step(model, sequences, picks, config: TrainConfig, rng) -> dict:
     """Loss terms of one batch; ``picks`` = [(sequence index, item index)]. With temporal fusion, the
-    previous frame's BEV features are computed first (no gradient) and fed in."""
+    previous frame's BEV features are computed first (no gradient) and fed in. The batch is built on the CPU and
+    copied to the model's device once."""
+    device = model_device(model)
     items, prev_inputs, prev_valid = [], [], []
     for si, k in picks:
         seq = sequences[si]
@@ -101,14 +107,14 @@ def training_step(model, sequences, picks, config: TrainConfig, rng) -> dict:
             x = seq.inputs(seq.frames[k - 1] if has_prev else seq.frames[k], augment_rng(seq, rng))
             x['view_mask'] = drop_views(x['view_mask'], config.view_dropout, config.min_views, rng)
             prev_inputs.append(x)
-    batch = _batch(items)
+    batch = _batch(items, device)
     grid_shape = sequences[picks[0][0]].grid.shape
     previous = valid = None
     if config.bev.temporal:
-        p = _batch(prev_inputs)
+        p = _batch(prev_inputs, device)
         with torch.no_grad():
             previous = model(p['images'], p['feat_H_grid'], p['view_mask'], grid_shape)['bev']
-        valid = torch.tensor(prev_valid)
+        valid = torch.tensor(prev_valid, device=device)
     out = model(batch['images'], batch['feat_H_grid'], batch['view_mask'], grid_shape, previous, valid)
     targets = {k: batch[k] for k in TARGET_KEYS}
     if not config.bev.temporal or not any(prev_valid):
@@ -134,12 +140,21 @@ def validation_record(specs: list, results: list) -> dict:
     return record
 
 
-def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: bool = True, log=print) -> list:
+def train(
+    config: TrainConfig,
+    out_dir=None,
+    resume: bool = False,
+    progress: bool = True,
+    log=print,
+    device: str = DEFAULT_DEVICE,
+) -> list:
     """Train; returns the history (one dict per epoch). Writes ``last.pt`` every epoch, ``best.pt`` at the
     best ``val_score`` (validation MODA weighted per sequence, :func:`validation_record`), ``history.json``;
-    ``resume`` continues from ``last.pt`` (same config)."""
+    ``resume`` continues from ``last.pt`` (same config). ``device``: where the network trains and validates
+    (``matrix_core.device``; resolved first, ``auto``'s choice told to ``log``); samples are made on the CPU."""
     from tqdm import tqdm
 
+    device = resolve_device(device, log)
     out_dir = Path(out_dir or config.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     torch.set_num_threads(config.num_threads)
@@ -149,7 +164,7 @@ def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: boo
     if len(shapes) != 1:
         raise ValueError(f'training sequences have different BEV grids {shapes}: set bev.area in the config')
     val_sequences = open_sequences(config.val, config) if config.val else []
-    model = build_model(config.bev.model, temporal=config.bev.temporal)
+    model = build_model(config.bev.model, temporal=config.bev.temporal).to(device)
     optimizer = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay)
     start_epoch, history, best = 0, [], -np.inf
     last = out_dir / 'last.pt'
@@ -210,7 +225,7 @@ def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: boo
             save_checkpoint(out_dir / f'epoch{epoch + 1}.pt', model, config.bev, epoch=epoch + 1)
         atomic_write_text(out_dir / 'history.json', json.dumps(history, indent=2))
     if config.average_epochs and not any('averaged' in h for h in history):
-        record = average_last_epochs(config, out_dir, sequences, val_sequences, best, progress)
+        record = average_last_epochs(config, out_dir, sequences, val_sequences, best, progress, device)
         history.append(record)
         log(' '.join(f'{k}={v:.4f}' if isinstance(v, float) else f'{k}={v}' for k, v in record.items()))
         atomic_write_text(out_dir / 'history.json', json.dumps(history, indent=2))
@@ -218,7 +233,13 @@ def train(config: TrainConfig, out_dir=None, resume: bool = False, progress: boo
 
 
 def average_last_epochs(
-    config: TrainConfig, out_dir: Path, sequences: list, val_sequences: list, best: float, progress: bool = True
+    config: TrainConfig,
+    out_dir: Path,
+    sequences: list,
+    val_sequences: list,
+    best: float,
+    progress: bool = True,
+    device='cpu',
 ) -> dict:
     """The mean of the weights of the last ``config.average_epochs`` epochs (``out_dir/epochN.pt``), its
     batch-norm statistics measured over ``config.bn_samples`` training steps (augmented, views dropped, as
@@ -233,6 +254,7 @@ def average_last_epochs(
         )
     model = build_model(config.bev.model, temporal=config.bev.temporal)
     model.load_state_dict(average_state_dicts([load_checkpoint(out_dir / f'epoch{e}.pt')['model'] for e in epochs]))
+    model = model.to(device)
     rng = np.random.default_rng(config.seed * 1000 + config.epochs)
     index = [(si, k) for si, s in enumerate(sequences) for k in range(len(s))]
     picks = [index[i] for i in rng.permutation(len(index))[: config.bn_samples]]

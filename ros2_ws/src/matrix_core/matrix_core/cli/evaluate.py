@@ -13,11 +13,15 @@ wrong-size image, missing or malformed calibration, NaN or singular homography o
 masked there; a frame whose ground truth, inputs or model step raises, or that the folder has only in part,
 is not scored. Both are printed with their reasons and listed in ``metrics.json`` (``failures``: counts, then
 each frame and view); the metrics are over the scored frames.
+
+``--device`` (``auto`` | ``cpu`` | ``cuda`` | ``cuda:N``, ``matrix_core.device``): where the network runs; a GPU
+this machine lacks is an error before anything is read.
 """
 
 import json
 from pathlib import Path
 
+from matrix_core.device import DeviceSettings, resolve_device
 from matrix_core.fusion.image_boxes import ImageBoxSettings
 from matrix_core.fusion.settings import resolve_checkpoint
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
@@ -55,6 +59,7 @@ def add_parser(subparsers) -> None:
     p.add_argument('--iou', type=float, default=0.5, help='image-plane match threshold (default: 0.5)')
     add_settings_arguments(p, TrackerSettings)
     add_settings_arguments(p, ImageBoxSettings)
+    add_settings_arguments(p, DeviceSettings)
     p.set_defaults(func=run)
 
 
@@ -68,9 +73,11 @@ def run(args) -> int:
     from matrix_core.metrics import write_bev_points
     from matrix_core.metrics.report import format_metrics
 
+    device = resolve_device(settings_from_namespace(DeviceSettings, args).device)  # before any work
     torch.set_num_threads(1)
     overrides = {} if args.score_threshold is None else {'score_threshold': args.score_threshold}
     model, settings = load_model(resolve_checkpoint(args.checkpoint), overrides)
+    model = model.to(device)
     probe = BevFrames(
         args.dataset, settings, calibration=args.calibration, cache_images=False, calibration_dir=args.calibration_dir
     )

@@ -9,8 +9,13 @@ cached there, so a rerun resumes where the last one stopped. The small per-step 
 (default ``<report folder>/results/<mode>``, i.e. docs/results/MODE: commit them), and the report is
 written from there; ``--report-only`` rewrites the report from that folder alone. ``quick`` (minutes) is a
 smoke test; ``standard`` is the size of docs/RESULTS.md (about 2.5 hours with two steps at once on a
-2-core machine); ``full`` the shipped complex model's recipe (many hours).
+2-core machine); ``full`` the shipped complex model's recipe (many hours). ``--device`` (``auto`` | ``cpu`` |
+``cuda`` | ``cuda:N``, ``matrix_core.device``): where training and evaluation run the network; a GPU this machine
+lacks is an error before the first step.
 """
+
+from matrix_core.device import DeviceSettings
+from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
 
 def add_parser(subparsers) -> None:
@@ -35,6 +40,7 @@ def add_parser(subparsers) -> None:
     )
     p.add_argument('--report-only', action='store_true', help='only rewrite the report from the --metrics folder')
     p.add_argument('--no-progress', action='store_true', help='no progress bars')
+    add_settings_arguments(p, DeviceSettings)
     p.set_defaults(func=run)
 
 
@@ -46,6 +52,7 @@ def run(args) -> int:
     from matrix_core.experiments.runner import run_experiments
     from matrix_core.experiments.sizes import SIZES
 
+    device = settings_from_namespace(DeviceSettings, args).device  # a GPU this machine lacks: an error now
     size = SIZES[args.mode]
     metrics = Path(args.metrics) if args.metrics else default_metrics_dir(args.report, size.name)
     if args.report_only:
@@ -61,6 +68,7 @@ def run(args) -> int:
         not args.no_progress,
         jobs=args.jobs,
         metrics_dir=metrics,
+        device=device,
     )
     states = [s['state'] for s in summary['steps'].values()]
     counts = ', '.join(f'{states.count(k)} {k}' for k in sorted(set(states)))

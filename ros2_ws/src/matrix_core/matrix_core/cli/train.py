@@ -3,7 +3,12 @@
 CONFIG is a YAML file or the name of a shipped config (``matrix_core/bev/configs``: sample, complex).
 Writes ``last.pt`` (every epoch, for --resume), ``best.pt`` (best validation score, ``val_score``: MODA
 weighted per validation sequence) and ``history.json`` (per epoch: losses, each validation sequence's MODA, MOTA, IDF1).
+``--device`` (``auto`` | ``cpu`` | ``cuda`` | ``cuda:N``, ``matrix_core.device``): where the network trains; a GPU
+this machine lacks is an error before anything is read.
 """
+
+from matrix_core.device import DeviceSettings
+from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
 
 def add_parser(subparsers) -> None:
@@ -30,6 +35,7 @@ def add_parser(subparsers) -> None:
         help='which checkpoint --export writes: the last epoch, or best.pt (highest validation score '
         'val_score: the model-selection protocol of the shipped default, docs/detector.md)',
     )
+    add_settings_arguments(p, DeviceSettings)
     p.set_defaults(func=run)
 
 
@@ -39,13 +45,14 @@ def run(args) -> int:
     from matrix_core.bev.config import CONFIG_DIR, load_config, resolve_config_path
     from matrix_core.bev.training import train
 
+    device = settings_from_namespace(DeviceSettings, args).device  # a GPU this machine lacks: an error now
     overrides = {
         k: v
         for k, v in (('epochs', args.epochs), ('max_steps_per_epoch', args.max_steps_per_epoch), ('seed', args.seed))
         if v is not None
     }
     config = load_config(args.config, overrides)
-    history = train(config, args.out, resume=args.resume)
+    history = train(config, args.out, resume=args.resume, device=device)
     out = Path(args.out or config.out_dir)
     epochs = [h for h in history if 'averaged' not in h]
     averaged = ' and the weight average of the last ones' if len(epochs) < len(history) else ''

@@ -7,10 +7,14 @@ fails is logged (``<name>.error.txt``) and the steps that need it are skipped; t
 ``run.json`` lists every step's state for the report (rewritten after each step, so a run killed midway
 says how far it got). With ``jobs`` > 1, steps whose needs are finished run at once in that many worker
 processes (one torch thread each, in plan order). Inside an evaluation step, a frame that fails is not scored
-and a view whose image or calibration fails is masked; its ``metrics.json`` lists them (``failures``).
+and a view whose image or calibration fails is masked; its ``metrics.json`` lists them (``failures``). The
+network's device (``matrix_core.device``) is resolved once, before the first step, recorded in ``run.json``
+(``machine``) and given to the executors that take a ``device`` (training, evaluation); a cached step is not
+redone for another device.
 """
 
 import dataclasses
+import inspect
 import json
 import multiprocessing
 import shutil
@@ -21,6 +25,7 @@ from pathlib import Path
 
 import torch
 
+from matrix_core.device import DEFAULT_DEVICE, resolve_device
 from matrix_core.experiments.machine import code_commit, machine_info
 from matrix_core.experiments.steps import EXECUTORS, StepUnavailable
 
@@ -60,13 +65,17 @@ def _prepare(step, run_dir: Path) -> bool:
     return False
 
 
-def run_step(step, run_dir: Path, progress: bool, log) -> dict:
+def run_step(step, run_dir: Path, progress: bool, log, device: str) -> dict:
+    """Run one step (or find it cached); ``device`` (resolved, e.g. 'cpu', 'cuda:0') goes to an executor that
+    takes one."""
     out = run_dir / step.name
     if _prepare(step, run_dir):
         return {'state': CACHED, 'wall_s': _read_json(record_path(run_dir, step.name, 'done.json'))['wall_s']}
     start = time.perf_counter()
+    execute = EXECUTORS[step.kind]
+    on_device = {'device': device} if 'device' in inspect.signature(execute).parameters else {}
     try:
-        EXECUTORS[step.kind](step.params, out, run_dir, progress, log)
+        execute(step.params, out, run_dir, progress, log, **on_device)
     except StepUnavailable as exc:
         log(f'{step.name}: not run: {exc}')
         return {'state': UNAVAILABLE, 'reason': str(exc)}
@@ -83,6 +92,7 @@ def run_step(step, run_dir: Path, progress: bool, log) -> dict:
                 'kind': step.kind,
                 'params': step.params,
                 'wall_s': wall,
+                **({'device': device} if on_device else {}),
                 **code_commit(),
                 'finished_utc': time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime()),
             },
@@ -105,13 +115,15 @@ def _blocked(step, states: dict, planned: set):
     return None
 
 
-def _in_worker(step, run_dir: Path, threads: int) -> dict:
+def _in_worker(step, run_dir: Path, threads: int, device: str) -> dict:
     """One step in a worker process (progress bars off: several would interleave)."""
     torch.set_num_threads(threads)
-    return run_step(step, run_dir, False, print)
+    return run_step(step, run_dir, False, print, device)
 
 
-def _run_parallel(plan: list, run_dir: Path, threads: int, jobs: int, bar, states: dict, step_done) -> None:
+def _run_parallel(
+    plan: list, run_dir: Path, threads: int, jobs: int, bar, states: dict, step_done, device: str
+) -> None:
     """Run ``plan`` with ``jobs`` steps at once (spawned workers: no forked torch state), in plan order."""
     planned, pending, running = {s.name for s in plan}, list(plan), {}
     with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context('spawn')) as pool:
@@ -128,7 +140,7 @@ def _run_parallel(plan: list, run_dir: Path, threads: int, jobs: int, bar, state
                     bar.update()
                     step_done()
                     continue
-                running[pool.submit(_in_worker, step, run_dir, threads)] = step
+                running[pool.submit(_in_worker, step, run_dir, threads, device)] = step
             if not running:
                 continue
             finished, _ = wait(running, return_when=FIRST_COMPLETED)
@@ -145,11 +157,21 @@ def _run_parallel(plan: list, run_dir: Path, threads: int, jobs: int, bar, state
 
 
 def run_plan(
-    plan: list, size, run_dir, threads: int = 1, progress: bool = True, log=print, repo=None, jobs: int = 1
+    plan: list,
+    size,
+    run_dir,
+    threads: int = 1,
+    progress: bool = True,
+    log=print,
+    repo=None,
+    jobs: int = 1,
+    device: str = DEFAULT_DEVICE,
 ) -> dict:
-    """Run every step of ``plan`` (in order; ``jobs`` at once) under ``run_dir``; returns and writes ``run.json``."""
+    """Run every step of ``plan`` (in order; ``jobs`` at once) under ``run_dir``; returns and writes ``run.json``.
+    ``device``: the network's (``matrix_core.device``), resolved before the first step."""
     from tqdm import tqdm
 
+    device = str(resolve_device(device, log))
     run_dir = Path(run_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
     torch.set_num_threads(threads)
@@ -161,7 +183,7 @@ def run_plan(
             'transfer_fraction': size.transfer_fraction,
             'transfer_frames': size.transfer_frames,
         },
-        'machine': {**machine_info(threads, Path(repo or Path.cwd())), 'jobs': jobs},
+        'machine': {**machine_info(threads, Path(repo or Path.cwd())), 'jobs': jobs, 'device': device},
         'started_utc': time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime(started)),
         'wall_s': 0.0,
         'steps': states,
@@ -174,7 +196,7 @@ def run_plan(
         with tqdm(
             total=len(plan), desc=f'experiments ({size.name}, {jobs} jobs)', unit='step', disable=not progress
         ) as bar:
-            _run_parallel(plan, run_dir, threads, jobs, bar, states, step_done)
+            _run_parallel(plan, run_dir, threads, jobs, bar, states, step_done, device)
         summary['steps'] = {s.name: states[s.name] for s in plan}
     else:
         bar = tqdm(plan, desc=f'experiments ({size.name})', unit='step', disable=not progress)
@@ -188,7 +210,7 @@ def run_plan(
                     'reason': f'needs {blocked[0]}, which was {"not run" if blocked[1] == "wait" else blocked[1]}',
                 }
             else:
-                states[step.name] = {'kind': step.kind, **run_step(step, run_dir, progress, log)}
+                states[step.name] = {'kind': step.kind, **run_step(step, run_dir, progress, log, device)}
             step_done()
     _write_run(run_dir, summary, started)
     return summary
@@ -213,15 +235,16 @@ def run_experiments(
     repo=None,
     jobs: int = None,
     metrics_dir=None,
+    device: str = DEFAULT_DEVICE,
 ) -> tuple:
     """The whole thing: plan of ``size`` run in ``out_dir/<size.name>`` (``jobs`` steps at once, default the
-    size's), its small files archived to ``metrics_dir`` (default ``<report folder>/results/<size>``),
-    then the report from that archive. Returns (run summary, report path)."""
+    size's; the network on ``device``), its small files archived to ``metrics_dir`` (default
+    ``<report folder>/results/<size>``), then the report from that archive. Returns (run summary, report path)."""
     from matrix_core.experiments.archive import archive_run, default_metrics_dir
     from matrix_core.experiments.plan import build_plan
     from matrix_core.experiments.report import write_report
 
     run_dir = Path(out_dir) / size.name
-    summary = run_plan(build_plan(size), size, run_dir, threads, progress, log, repo, jobs or size.jobs)
+    summary = run_plan(build_plan(size), size, run_dir, threads, progress, log, repo, jobs or size.jobs, device)
     archive = archive_run(run_dir, metrics_dir or default_metrics_dir(report, size.name))
     return summary, write_report(archive, report, images, repo=repo)

@@ -1,4 +1,5 @@
-"""What each kind of step runs. ``EXECUTORS[kind](params, out, run_dir, progress, log)`` writes into ``out``;
+"""What each kind of step runs. ``EXECUTORS[kind](params, out, run_dir, progress, log)`` writes into ``out``
+(those that run the network also take ``device``, a resolved ``matrix_core.device`` setting);
 raises :class:`StepUnavailable` when this checkout lacks something the step needs (not an error of the run)."""
 
 import inspect
@@ -150,7 +151,7 @@ def initialise_from(init_checkpoint: Path, config, out: Path) -> None:
     )
 
 
-def run_train(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
+def run_train(p: dict, out: Path, run_dir: Path, progress: bool, log, device: str) -> None:
     from matrix_core.bev.augment import AugmentConfig
     from matrix_core.bev.config import TrainConfig
     from matrix_core.bev.settings import BevSettings
@@ -172,15 +173,16 @@ def run_train(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
     if p['init'] and not (out / 'last.pt').is_file():
         out.mkdir(parents=True, exist_ok=True)
         initialise_from(run_dir / p['init'] / 'last.pt', config, out)
-    train(config, out, resume=True, progress=progress, log=lambda msg: None)
+    train(config, out, resume=True, progress=progress, log=lambda msg: None, device=device)
 
 
-def run_evaluate(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
+def run_evaluate(p: dict, out: Path, run_dir: Path, progress: bool, log, device: str) -> None:
     from matrix_core.bev.calibration_sources import CALIBRATION_SOURCES
     from matrix_core.bev.checkpoint import load_model
     from matrix_core.bev.data import BevFrames
     from matrix_core.bev.evaluation import evaluate
     from matrix_core.bev.plots import save_trajectories_png
+    from matrix_core.device import resolve_device
 
     if p['calibration'] not in CALIBRATION_SOURCES:
         raise StepUnavailable(
@@ -194,6 +196,7 @@ def run_evaluate(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None
         kwargs['calibration_dir'] = str(run_dir / p['calibration_dir'])
     start = time.perf_counter()
     model, settings = load_model(run_dir / p['checkpoint'])
+    model = model.to(resolve_device(device))
     data = BevFrames(run_dir / p['dataset'], settings, None, p['calibration'], p['views'], False, **kwargs)
     result = evaluate(model, data, progress=False)
     train_params = json.loads((run_dir / 'steps' / (str(Path(p['checkpoint']).parent) + '.started.json')).read_text())

@@ -13,6 +13,7 @@ from matrix_core.bev.checkpoint import load_model
 from matrix_core.bev.data import prepare_image
 from matrix_core.bev.inference import SequenceRunner
 from matrix_core.bev.lifting import feat_H_grid
+from matrix_core.device import resolve_device
 from matrix_core.fusion.settings import FuseSettings
 from matrix_core.fusion.views import FrameStatus, ViewInput, ViewInputError, check_image
 from matrix_core.tracking import BevDetections, BevTracker
@@ -72,15 +73,20 @@ class BevFuser:
         settings: :class:`FuseSettings`.
         model, bev_settings: an already loaded model (tests); default: ``load_model(settings.checkpoint_path())``
             with the decoding overrides of ``settings``.
+        log: where ``device`` ``auto`` says what it chose (``matrix_core.device.resolve_device``).
+
+    The network runs on ``settings.device``; each frame's images are prepared on the CPU (decoded, resized,
+    normalised) and copied to the device once, as one batch.
     """
 
-    def __init__(self, settings: FuseSettings, model=None, bev_settings=None):
+    def __init__(self, settings: FuseSettings, model=None, bev_settings=None, log=None):
         self.settings = settings
+        self.device = resolve_device(settings.device, *([log] if log else []))  # before any work
         torch.set_num_threads(settings.threads)
         cv2.setNumThreads(settings.threads)  # image decoding and resizing: no idle pool threads spinning
         if model is None:
             model, bev_settings = load_model(settings.checkpoint_path(), settings.decode_overrides())
-        self.model, self.bev_settings = model.to(settings.device).eval(), bev_settings
+        self.model, self.bev_settings = model.to(self.device).eval(), bev_settings
         self.grid = bev_settings.grid(settings.area)
         self.input_size = (bev_settings.image_width, bev_settings.image_height)
         self.runner = SequenceRunner(self.model, bev_settings, self.grid)

@@ -5,6 +5,7 @@ from pathlib import Path
 
 from matrix_core import topics
 from matrix_core.datasets.matrix_conventions import MATRIX_AREA, MATRIX_VIEWS
+from matrix_core.device import DeviceSettings
 from matrix_core.tracking.settings import TrackerSettings
 
 INPUT_KINDS = ('homography', 'camera_info')
@@ -33,9 +34,9 @@ def resolve_checkpoint(checkpoint: str) -> Path:
 
 
 @dataclass
-class FuseSettings(TrackerSettings):
+class FuseSettings(DeviceSettings, TrackerSettings):
     """Everything the fusion of N views needs. Seconds, metres. ``frame_interval_s`` (from the tracker
-    settings) is the frame period of the streams."""
+    settings) is the frame period of the streams; ``device`` (``matrix_core.device``) where the network runs."""
 
     views: list[str] = field(
         default_factory=lambda: list(MATRIX_VIEWS),
@@ -85,7 +86,6 @@ class FuseSettings(TrackerSettings):
             '(e.g. detector_tiny_seed0.pt, the faster detector); empty: the shipped default detector_seed1.pt'
         },
     )
-    device: str = field(default='cpu', metadata={'help': 'torch device (the BEV runner decodes on the CPU)'})
     threads: int = field(default=1, metadata={'help': 'torch and OpenCV CPU threads (1: one core, as benchmarked)'})
     area: list[float] = field(
         default_factory=lambda: list(MATRIX_AREA),
@@ -127,8 +127,6 @@ class FuseSettings(TrackerSettings):
             raise ValueError(f'area must be x_min y_min x_max y_max, got {self.area}')
         if self.sync_timeout < 0 or self.threads < 1 or self.temporal_reset_gap_s <= 0 or self.tracker_reset_gap_s <= 0:
             raise ValueError('sync_timeout >= 0, threads >= 1 and the reset gaps > 0 are required')
-        if not self.device.startswith('cpu'):
-            raise ValueError(f'device {self.device!r}: only cpu is supported (SequenceRunner decodes on the CPU)')
 
     def topic(self, pattern: str, view: str) -> str:
         """A pattern's topic for ``view``: '{view}/image_raw' -> 'D3/image_raw' (= topics.drone_topic)."""
