@@ -13,11 +13,12 @@ the recording with ``matrix-tracker evaluate-recording OUT/recording --ground-tr
 """
 
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument, OpaqueFunction, SetEnvironmentVariable
+from launch.actions import DeclareLaunchArgument, LogInfo, OpaqueFunction, SetEnvironmentVariable
 from launch.conditions import IfCondition
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 
+from matrix_bringup.drone_check import left_out_text, without_unreadable_drones
 from matrix_bringup.graph import GraphSettings, graph_nodes
 from matrix_bringup.replay_end import ReplayEnd
 from matrix_ros.launch_settings import declare_arguments, settings_from_launch
@@ -36,9 +37,12 @@ EXIT_AT_END = DeclareLaunchArgument(
 def _graph(context):
     """Resolved at launch time: the number of processes depends on ``views`` and ``drones_per_process``."""
     settings = settings_from_launch(GraphSettings, context, other_arguments=['exit_at_end'])
+    settings, left_out = without_unreadable_drones(settings)  # a drone that cannot start: the others run
     actions = (
         [SetEnvironmentVariable('FASTRTPS_DEFAULT_PROFILES_FILE', settings.dds_profile)] if settings.dds_profile else []
     )
+    if left_out:
+        actions.append(LogInfo(msg=f'full_graph: {left_out_text(left_out)}; the other drones run'))
     specs = graph_nodes(settings)
     nodes = {
         spec.label: Node(
@@ -56,7 +60,11 @@ def _graph(context):
     if IfCondition(LaunchConfiguration('exit_at_end')).evaluate(context):
         monitor = next((s.label for s in specs if s.executable == 'graph_monitor'), None)
         actions += ReplayEnd(
-            nodes, player=specs[-1].label, monitor=monitor, monitor_timeout_s=settings.lockstep_timeout
+            nodes,
+            player=specs[-1].label,
+            monitor=monitor,
+            monitor_timeout_s=settings.lockstep_timeout,
+            left_out=left_out_text(left_out),
         ).handlers()
     return actions + list(nodes.values())
 

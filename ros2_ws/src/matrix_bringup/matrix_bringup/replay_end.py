@@ -28,10 +28,13 @@ class ReplayFailed(RuntimeError):
 class ReplayEnd:
     """Event handlers that end the launch after the replay. ``actions``: the launch_ros ``Node`` actions,
     by label ('fuse', 'D3/calib', ...); ``player`` and ``monitor`` (or None) are labels among them;
-    ``monitor_timeout_s``: how long the monitor may take to score after the last frame."""
+    ``monitor_timeout_s``: how long the monitor may take to score after the last frame; ``left_out``: the
+    drones left out at start and why (``drone_check.left_out_text``), said again when the replay ends."""
 
-    def __init__(self, actions: dict, player: str, monitor: str = None, monitor_timeout_s: float = 120.0):
-        self.actions, self.player, self.monitor = actions, player, monitor
+    def __init__(
+        self, actions: dict, player: str, monitor: str = None, monitor_timeout_s: float = 120.0, left_out: str = ''
+    ):
+        self.actions, self.player, self.monitor, self.left_out = actions, player, monitor, left_out
         self.monitor_timeout_s = monitor_timeout_s
         self.exited = {}  # label -> exit code, of the player and the monitor
         self.ending = False  # once true, processes exit because the launch stops them
@@ -86,4 +89,6 @@ class ReplayEnd:
         if self.ending:
             return []
         self.ending = True
+        if self.left_out:
+            reason += f'; ran without: {self.left_out}'
         return [LogInfo(msg=f'replay done: {reason}; stopping every node'), EmitEvent(event=Shutdown(reason=reason))]

@@ -9,8 +9,9 @@ if any, has written its scores), then stops every node (SIGTERM, SIGKILL after `
 nodes also get SIGTERM if ``run_graph`` itself dies, so no process is left behind.
 
 Exit code: the player's (0: every frame played and processed; 3: lockstep timed out for some frame),
-4 when another node died before the end (or the monitor could score nothing), 2 on bad settings, 130 on
-Ctrl-C.
+4 when another node died before the end (or the monitor could score nothing), 5 when every frame was played
+and processed but a drone was left out at start (its reference image or calibration cannot be read:
+``drone_check``; the others run, and the exit message names it), 2 on bad settings, 130 on Ctrl-C.
 
     run_graph --bag BAG --dataset DIR [--record OUT/recording] [--monitor] [--drones_per_process 4] ...
 """
@@ -24,6 +25,7 @@ import sys
 import time
 from pathlib import Path
 
+from matrix_bringup.drone_check import LEFT_OUT_EXIT, left_out_text, without_unreadable_drones
 from matrix_bringup.graph import GraphSettings, NodeSpec, graph_nodes, player_exit_text
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
@@ -102,6 +104,9 @@ class Graph:
 
 def run(settings: GraphSettings, log_dir: Path, stop_timeout: float = 10.0, echo=print) -> int:
     """Start the graph, play the bag, stop everything; returns the exit code described above."""
+    settings, left_out = without_unreadable_drones(settings)
+    if left_out:
+        echo(f'run_graph: {left_out_text(left_out)}; the other drones run')
     specs = graph_nodes(settings)
     graph = Graph(log_dir, settings.dds_profile)
     player, monitor = specs[-1].label, next((s.label for s in specs if s.executable == 'graph_monitor'), None)
@@ -144,6 +149,9 @@ def run(settings: GraphSettings, log_dir: Path, stop_timeout: float = 10.0, echo
         return 4
     code = graph.procs[player].returncode
     echo(f'run_graph: player exited with {code}{player_exit_text(code)}')
+    if left_out:
+        echo(f'run_graph: ran without drone(s) {", ".join(sorted(left_out))}: {left_out_text(left_out)}')
+        return LEFT_OUT_EXIT if code == 0 else code
     return code
 
 
@@ -161,7 +169,7 @@ def main(argv=None) -> int:
     try:
         settings = settings_from_namespace(GraphSettings, args)
         return run(settings, Path(args.log_dir), args.stop_timeout)
-    except (ValueError, FileNotFoundError) as exc:
+    except (ValueError, OSError) as exc:  # bad settings or input files: one line, no traceback
         print(f'run_graph: error: {exc}', file=sys.stderr)
         return 2
 

@@ -12,7 +12,10 @@ No frame ends the run: a view whose image or calibration cannot be used in a fra
 wrong-size image, missing or malformed calibration, NaN or singular homography or registration record) is
 masked there; a frame whose ground truth, inputs or model step raises, or that the folder has only in part,
 is not scored. Both are printed with their reasons and listed in ``metrics.json`` (``failures``: counts, then
-each frame and view); the metrics are over the scored frames.
+each frame and view); the metrics are over the scored frames. A frame whose annotation file cannot be read
+is left out of the image plane only (``failures.image_plane_failed_frames``); everything else is written.
+``--out`` must be new or empty (``--overwrite``: write into it) and not be, contain or lie inside the dataset,
+the calibration folder or the checkpoint.
 
 ``--device`` (``auto`` | ``cpu`` | ``cuda`` | ``cuda:N``, ``matrix_core.device``): where the network runs; a GPU
 this machine lacks is an error before anything is read.
@@ -21,9 +24,13 @@ this machine lacks is an error before anything is read.
 import json
 from pathlib import Path
 
+import numpy as np
+
+from matrix_core.cli.argument_types import check_frame_range, fraction, non_negative_int
 from matrix_core.device import DeviceSettings, resolve_device
 from matrix_core.fusion.image_boxes import ImageBoxSettings
 from matrix_core.fusion.settings import resolve_checkpoint
+from matrix_core.output_paths import add_overwrite_argument, atomic_write_text, check_output
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 from matrix_core.tracking.settings import TrackerSettings
 
@@ -41,7 +48,9 @@ def add_parser(subparsers) -> None:
         help='model checkpoint (.pt) written by train, or the name of '
         'one shipped in matrix_core/bev/checkpoints (e.g. detector_seed1.pt)',
     )
-    p.add_argument('--frames', type=int, nargs=2, metavar=('FIRST', 'LAST'), help='frame range (inclusive)')
+    p.add_argument(
+        '--frames', type=non_negative_int, nargs=2, metavar=('FIRST', 'LAST'), help='frame range (inclusive)'
+    )
     p.add_argument(
         '--calibration',
         default='ground_truth',
@@ -53,10 +62,11 @@ def add_parser(subparsers) -> None:
         help='output folder of matrix-tracker calibrate (pnp) or register (registration) for those calibration sources',
     )
     p.add_argument('--drop-views', nargs='*', default=[], help='views to remove at test time, e.g. D2 D6')
-    p.add_argument('--score-threshold', type=float, help='override the checkpoint\'s decoding threshold')
-    p.add_argument('--out', default='out/evaluate', help='folder for PNGs, text files and metrics.json')
-    p.add_argument('--heatmaps', type=int, default=3, help='number of frames to draw heatmap PNGs for')
-    p.add_argument('--iou', type=float, default=0.5, help='image-plane match threshold (default: 0.5)')
+    p.add_argument('--score-threshold', type=fraction, help='override the checkpoint\'s decoding threshold')
+    p.add_argument('--out', default='out/evaluate', help='folder for PNGs, text files and metrics.json (new or empty)')
+    add_overwrite_argument(p)
+    p.add_argument('--heatmaps', type=non_negative_int, default=3, help='number of frames to draw heatmap PNGs for')
+    p.add_argument('--iou', type=fraction, default=0.5, help='image-plane match threshold (default: 0.5)')
     add_settings_arguments(p, TrackerSettings)
     add_settings_arguments(p, ImageBoxSettings)
     add_settings_arguments(p, DeviceSettings)
@@ -74,9 +84,12 @@ def run(args) -> int:
     from matrix_core.metrics.report import format_metrics
 
     device = resolve_device(settings_from_namespace(DeviceSettings, args).device)  # before any work
+    checkpoint = resolve_checkpoint(args.checkpoint)
+    out = check_output(args.out, [args.dataset, args.calibration_dir, checkpoint], args.overwrite)
+    check_frame_range(args.frames)
     torch.set_num_threads(1)
     overrides = {} if args.score_threshold is None else {'score_threshold': args.score_threshold}
-    model, settings = load_model(resolve_checkpoint(args.checkpoint), overrides)
+    model, settings = load_model(checkpoint, overrides)
     model = model.to(device)
     probe = BevFrames(
         args.dataset, settings, calibration=args.calibration, cache_images=False, calibration_dir=args.calibration_dir
@@ -108,25 +121,28 @@ def run(args) -> int:
     print(format_metrics(result.detection, result.tracking))
     if result.failures_text():
         print(result.failures_text())
-    out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     write_bev_points(out / 'detections.txt', result.detections)
     write_bev_points(out / 'tracks.txt', result.tracks)
     write_bev_points(out / 'ground_truth.txt', result.gt)
-    image_plane = _image_plane(args, data, result, views, out)
-    (out / 'metrics.json').write_text(
+    image_plane, image_plane_failed = _image_plane(args, data, result, views, out)
+    failures = result.failures_dict()
+    failures['image_plane_frames_failed'] = len(image_plane_failed)
+    failures['image_plane_failed_frames'] = [{'frame': f, 'reason': r} for f, r in sorted(image_plane_failed.items())]
+    atomic_write_text(
+        out / 'metrics.json',
         json.dumps(
             {
                 'detection': result.detection.as_dict(),
                 'tracking': result.tracking.as_dict(),
-                'image_plane': image_plane.as_dict(),
+                'image_plane': image_plane.as_dict() if image_plane else None,
                 'calibration': args.calibration,
                 'views': views,
                 'calibration_dir': args.calibration_dir,
-                'failures': result.failures_dict(),
+                'failures': failures,
             },
             indent=2,
-        )
+        ),
     )
     step = max(len(result.outputs) // max(args.heatmaps, 1), 1)
     for o in result.outputs[::step][: args.heatmaps]:
@@ -154,16 +170,35 @@ def run(args) -> int:
     return 0
 
 
-def _image_plane(args, data, result, views, out):
-    """Score, print, write and draw the tracks' boxes in every drone (module docstring)."""
+def _image_plane(args, data, result, views, out) -> tuple:
+    """Score, print, write and draw the tracks' boxes in every drone (module docstring); returns the scores
+    (None when nothing could be scored) and frame -> why it was left out of the image plane (its annotation
+    file unreadable: that frame's boxes are not scored, the BEV metrics keep it)."""
     from matrix_core.evaluation.image_plane import draw_frame_png, homography_cameras, score_image_plane
+    from matrix_core.metrics import BevPoints
     from matrix_core.metrics.image_boxes import format_view_table, write_mot_boxes
 
+    failed = {}
+    for f in result.scored_frames:
+        try:
+            data.dataset.annotations(f)
+        except Exception as exc:  # one bad annotation file leaves its frame out of the image plane only
+            failed[f] = f'annotations: {type(exc).__name__}: {exc}'
+    scored = [f for f in result.scored_frames if f not in failed]
+    for f, reason in sorted(failed.items()):
+        print(f'image plane: frame {f} not scored: {reason}')
+    if not scored:
+        print('image plane: no frame with readable annotations; not scored')
+        return None, failed
+    tracks = result.track_detections
+    keep = np.isin(tracks.frames, scored)
+    tracks = BevPoints(
+        tracks.frames[keep], tracks.xy[keep], None if tracks.ids is None else tracks.ids[keep], tracks.scores[keep]
+    )
     camera_of = homography_cameras(data.dataset, data.homography_of)
-    scored = result.scored_frames
     scores = score_image_plane(
         data.dataset,
-        result.track_detections,
+        tracks,
         _or_none(camera_of),
         views,
         scored,
@@ -183,7 +218,7 @@ def _image_plane(args, data, result, views, out):
         frame,
         f'frame {frame}: tracks (id, colour) and annotated boxes (white)',
     )
-    return scores
+    return scores, failed
 
 
 def _or_none(fn):

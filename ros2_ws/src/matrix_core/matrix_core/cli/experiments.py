@@ -14,6 +14,7 @@ smoke test; ``standard`` is the size of docs/RESULTS.md (about 2.5 hours with tw
 lacks is an error before the first step.
 """
 
+from matrix_core.cli.argument_types import positive_int
 from matrix_core.device import DeviceSettings
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
@@ -32,10 +33,10 @@ def add_parser(subparsers) -> None:
         '--metrics',
         help='folder of the per-step files the report is written from (default: results/MODE next to the report)',
     )
-    p.add_argument('--threads', type=int, default=1, help='torch threads per step (default 1)')
+    p.add_argument('--threads', type=positive_int, default=1, help='torch threads per step (default 1)')
     p.add_argument(
         '--jobs',
-        type=int,
+        type=positive_int,
         help="steps run at once, one process each (default: the size's, 2 for standard and full, 1 for quick)",
     )
     p.add_argument('--report-only', action='store_true', help='only rewrite the report from the --metrics folder')

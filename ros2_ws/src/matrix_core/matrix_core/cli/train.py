@@ -7,7 +7,9 @@ weighted per validation sequence) and ``history.json`` (per epoch: losses, each 
 this machine lacks is an error before anything is read.
 """
 
+from matrix_core.cli.argument_types import non_negative_int, positive_int
 from matrix_core.device import DeviceSettings
+from matrix_core.output_paths import add_overwrite_argument, check_output
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
 
@@ -18,8 +20,9 @@ def add_parser(subparsers) -> None:
     p.add_argument('--config', required=True, help='YAML config file or shipped config name')
     p.add_argument('--out', help='output folder (default: out_dir of the config)')
     p.add_argument('--resume', action='store_true', help='continue from OUT/last.pt if it exists')
-    p.add_argument('--epochs', type=int, help='override the number of epochs')
-    p.add_argument('--max-steps-per-epoch', type=int, help='override max_steps_per_epoch (0: all)')
+    add_overwrite_argument(p)
+    p.add_argument('--epochs', type=positive_int, help='override the number of epochs')
+    p.add_argument('--max-steps-per-epoch', type=non_negative_int, help='override max_steps_per_epoch (0: all)')
     p.add_argument('--seed', type=int, help='override the seed')
     p.add_argument(
         '--export',
@@ -52,8 +55,14 @@ def run(args) -> int:
         if v is not None
     }
     config = load_config(args.config, overrides)
-    history = train(config, args.out, resume=args.resume, device=device)
     out = Path(args.out or config.out_dir)
+    # before any work: never into a training or validation sequence or over the config; an earlier run's
+    # folder only with --resume (continue it) or --overwrite
+    inputs = [resolve_config_path(args.config), *(s.path for s in [*config.train, *config.val])]
+    check_output(out, inputs, args.resume or args.overwrite)
+    if args.export:  # a shipped checkpoint is re-exported in place: only an overlap with an input is refused
+        check_output(args.export, inputs, True, '--export')
+    history = train(config, args.out, resume=args.resume, device=device)
     epochs = [h for h in history if 'averaged' not in h]
     averaged = ' and the weight average of the last ones' if len(epochs) < len(history) else ''
     print(f'done: {len(epochs)} epochs{averaged}, checkpoints in {out}')

@@ -29,22 +29,29 @@ class ViewCameras:
         intrinsics: view -> (K (3, 3), (w, h)) for homography geometry (empty: CameraInfo only).
     """
 
-    def __init__(self, settings: ImageBoxSettings, intrinsics: dict = None):
+    def __init__(self, settings: ImageBoxSettings, intrinsics: dict = None, unavailable: dict = None):
         self.settings, self.intrinsics = settings, dict(intrinsics or {})
+        self.unavailable = dict(unavailable or {})  # view -> why it has no intrinsics (no boxes in it)
 
     @classmethod
     def from_dataset(cls, settings: ImageBoxSettings, root, views) -> 'ViewCameras':
-        """Intrinsics from ``root``'s reference calibrations (those it has), obstacles from its meta."""
+        """Intrinsics from ``root``'s reference calibrations (those it has), obstacles from its meta. A view
+        whose reference cannot be read gets no boxes (``unavailable`` says why); the others do."""
         from matrix_core.datasets.open import open_dataset
+        from matrix_core.datasets.types import DatasetError
 
         dataset = open_dataset(root)
-        intrinsics = {}
+        intrinsics, unavailable = {}, {}
         if getattr(dataset, 'has_reference', False):
             for v in views:
-                cam = dataset.reference_camera(v)
+                try:
+                    cam = dataset.reference_camera(v)
+                except (DatasetError, OSError, ValueError) as exc:  # one drone's bad file: that drone only
+                    unavailable[v] = f'reference: {exc}'
+                    continue
                 intrinsics[v] = (cam.K, (cam.width, cam.height))
         boxes = obstacles_from_meta(getattr(dataset, 'meta', None), settings.obstacle_boxes)
-        return cls(replace(settings, obstacle_boxes=boxes), intrinsics)
+        return cls(replace(settings, obstacle_boxes=boxes), intrinsics, unavailable)
 
     def camera(self, view: str, geometry_msg):
         """The view's Camera from its geometry message, or None (no message, failed/unusable registration,

@@ -1,0 +1,27 @@
+"""Leaving out of the graph a drone whose start-up inputs cannot be read (``matrix_core.datasets.drone_inputs``):
+the other drones, fuse and the recorder run without it, and the replay's end names it (``run_graph``,
+``full_graph.launch.py``)."""
+
+from dataclasses import replace
+
+from matrix_core.datasets import MatrixDataset
+from matrix_core.datasets.drone_inputs import unreadable_drones
+
+LEFT_OUT_EXIT = 5  # run_graph's exit code when every frame played but some drone was left out at start
+
+
+def without_unreadable_drones(settings) -> tuple:
+    """(GraphSettings without the drones whose reference cannot be read, view -> why each was left out);
+    ValueError when no drone is left."""
+    left_out = unreadable_drones(MatrixDataset(settings.dataset), settings.views)
+    if not left_out:
+        return settings, {}
+    kept = [v for v in settings.views if v not in left_out]
+    if not kept:
+        raise ValueError(f'no drone can start: {left_out_text(left_out)}')
+    return replace(settings, views=kept), left_out
+
+
+def left_out_text(left_out: dict) -> str:
+    """One line naming each drone left out and why."""
+    return '; '.join(f'{view} left out ({why})' for view, why in sorted(left_out.items()))
