@@ -1,14 +1,15 @@
 """The shipped MATRIX site file holds what the code used for MATRIX before it was read from it: each value is
 compared with one computed independently, from the real sample's own files where they state it (reference
-calibrations and images, the marker grid under the block), else from the other definitions in the code (the
-calibrator's board config, the simulator's MATRIX variant, the shipped detector's grid)."""
+calibrations and images, the markers of the marker grid and of the boards), else from the other definitions in
+the code (the simulator's MATRIX variant, the shipped detector's grid)."""
 
+import cv2
 import numpy as np
 import pytest
 
 from matrix_core.bev.checkpoint import load_checkpoint
 from matrix_core.bev.settings import BevSettings
-from matrix_core.calib.scene import load_scene
+from matrix_core.calib.scene import default_config_path, load_scene
 from matrix_core.datasets import MatrixDataset
 from matrix_core.datasets import matrix_conventions as conv
 from matrix_core.fusion.settings import FuseSettings, shipped_checkpoint
@@ -76,8 +77,9 @@ def test_cameras_are_the_reference_calibrations(site, dataset):
         # The stored K is an ideal pinhole refined by calibrateCamera: it varies in the 4th decimal.
         np.testing.assert_allclose(d.camera.K, ref.K, atol=0.05)
         np.testing.assert_allclose(d.camera.dist, 0.0)
-    np.testing.assert_allclose(load_scene().K, site.drones[0].camera.K)  # the calibrator's config
-    assert load_scene().image_size == site.drones[0].camera.image_size
+    simulated = load_scene(default_config_path('sim_complex.yaml'))  # the simulator's camera of the MATRIX variant
+    np.testing.assert_allclose(simulated.K, site.drones[0].camera.K)
+    assert simulated.image_size == site.drones[0].camera.image_size
 
 
 def test_references_are_the_sample_reference_folder(site, dataset):
@@ -96,12 +98,60 @@ def _corner_set(points) -> np.ndarray:
     return np.array(sorted(map(tuple, np.round(points, 9))))
 
 
-def test_boards_are_the_calibrators_and_the_simulators(site):
-    calib = load_scene().boards
-    assert [b.name for b in site.boards] == [b.name for b in calib]
-    assert list(site.boards) == list(calib)
+def _board_markers(dataset, frame: int) -> np.ndarray:
+    """(M, 3) world metres of the Planes markers of ``frame`` that are not in ``3d.txt`` nor pedestrians (the
+    boards' markers), triangulated from every view's 2-D file and the frame's stored calibrations."""
+    central = set(np.loadtxt(dataset.root / 'matchings/Planes/3d.txt')[:, 1].astype(int))
+    seen = {}
+    for view in dataset.views:
+        rows = np.loadtxt(dataset.root / f'matchings/Planes/Camera{conv.drone_number(view)}_2d_{frame:04d}.txt')
+        for _, marker, u, v in rows:
+            if int(marker) >= 40 and int(marker) not in central:
+                seen.setdefault(int(marker), []).append((view, conv.pixels_from_file([[u, v]])[0]))
+    points = []
+    for views in seen.values():
+        if len(views) >= 2:
+            rows = [
+                r
+                for view, (u, v) in views
+                for P in [dataset.camera(view, frame).P]
+                for r in (u * P[2] - P[0], v * P[2] - P[1])
+            ]
+            X = np.linalg.svd(np.array(rows))[2][-1]
+            points.append(X[:3] / X[3])
+    return np.array(points)
+
+
+def test_boards_are_where_the_sample_markers_are(site, dataset):
+    # The sample's extra Planes markers are every second inner corner (i, j even) of the two boards.
+    markers = _board_markers(dataset, 1)
+    assert len(markers) == 200
+    for board in site.boards:
+        even = np.all(board.corner_indices() % 2 == 0, axis=1)
+        distance = np.linalg.norm(board.corners_world()[:, None] - markers[None], axis=2).min(axis=1)
+        assert np.all(distance[even] < 0.001) and np.all(distance[~even] > 0.1)
+
+
+def test_board_colours_are_those_of_the_reference_images(site, dataset):
+    # Projected into the empty reference images, the cells the site calls light are brighter than the dark
+    # ones (a board behind the block shows no contrast; swapped colours would show a negative one).
+    contrast = []
+    for view in dataset.views:
+        camera = dataset.reference_camera(view)
+        grey = cv2.cvtColor(dataset.reference_image(view), cv2.COLOR_BGR2GRAY).astype(float)
+        for board in site.boards:
+            a, b = (v.ravel() for v in np.meshgrid(np.arange(board.nx + 1), np.arange(board.ny + 1)))
+            uv = camera.project(board.points(a - 0.5, b - 0.5))
+            ok = camera.in_image(uv, 2)
+            values = grey[np.round(uv[ok, 1]).astype(int), np.round(uv[ok, 0]).astype(int)]
+            sign = board.cell_sign(a[ok], b[ok])
+            contrast.append(values[sign > 0].mean() - values[sign < 0].mean())
+    assert min(contrast) > -20 and np.median(contrast) > 100
+
+
+def test_boards_are_the_simulators(site):
     # The simulator's MATRIX variant gives the same boards by their outer corner and square count.
-    for ours, sim in zip(site.boards, load_scene_config('complex').boards):
+    for ours, sim in zip(site.boards, load_scene_config('complex').boards, strict=True):
         k = np.arange(1, sim.squares)
         i, j = np.meshgrid(k, k)
         sim_corners = np.c_[

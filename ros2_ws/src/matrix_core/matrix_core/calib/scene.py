@@ -15,6 +15,10 @@ internal y = -(file y)):
     initial_poses:                   # optional prior of the first frame, per view (world -> camera)
       D1: {rvec: [..], tvec: [..]}
 
+Instead of ``boards`` (and of ``image_size`` and ``intrinsics`` when all its drones share one camera), a scene
+may name a site file (docs/site-file.md): ``site: matrix`` (a shipped site) or a path relative to the scene
+file; the real MATRIX sample's scene is ``site: matrix``, so its boards are defined once, in the site file.
+
 Unknown keys are rejected so that a typo never silently falls back to a default.
 """
 
@@ -30,7 +34,7 @@ from matrix_core.settings import read_yaml
 
 CONFIG_PACKAGE = 'matrix_calib'
 DEFAULT_CONFIG_NAME = 'matrix_sample.yaml'
-_TOP_KEYS = {'image_size', 'intrinsics', 'boards', 'initial_poses'}
+_TOP_KEYS = {'image_size', 'intrinsics', 'boards', 'initial_poses', 'site'}
 _BOARD_KEYS = {'name', 'origin', 'square', 'inner_corners', 'axis_i', 'axis_j', 'first_cell_light'}
 
 
@@ -65,13 +69,25 @@ def _check_keys(where: str, got: dict, allowed: set) -> None:
         raise ValueError(f'{where}: unknown keys {sorted(unknown)} (allowed: {sorted(allowed)})')
 
 
-def scene_from_dict(data: dict, where: str = 'calibration config') -> CalibScene:
-    """Build a :class:`CalibScene` from the parsed YAML mapping; raises ValueError naming the problem."""
-    if not isinstance(data, dict):
-        raise ValueError(f'{where}: expected a mapping at the top level')
-    _check_keys(where, data, _TOP_KEYS)
-    if not data.get('boards'):
-        raise ValueError(f'{where}: no boards')
+def _site_scene(data: dict, where: str, folder: Path) -> tuple:
+    """(boards, data with the site's camera as ``image_size`` / ``intrinsics`` where it gives none) of the site
+    file ``data['site']`` names (a shipped site's name or a path relative to ``folder``)."""
+    from matrix_core.site import load_site, site_path
+
+    ref = str(data['site'])
+    if 'boards' in data:
+        raise ValueError(f'{where}: boards come from the site {ref}; give them in one place, not both')
+    site = load_site(folder / ref if (folder / ref).is_file() else site_path(ref))
+    if 'image_size' in data or 'intrinsics' in data:
+        return list(site.boards), data
+    cameras = {(d.camera.image_size, tuple(d.camera.K.ravel()), tuple(d.camera.dist)) for d in site.drones}
+    if len(cameras) != 1:
+        raise ValueError(f'{where}: the drones of site {ref} have different cameras: give image_size and intrinsics')
+    size, K, dist = cameras.pop()
+    return list(site.boards), {**data, 'image_size': list(size), 'intrinsics': {'K': list(K), 'dist': list(dist)}}
+
+
+def _boards(data: dict, where: str) -> list:
     boards = []
     for k, b in enumerate(data['boards']):
         _check_keys(f'{where} boards[{k}]', b, _BOARD_KEYS)
@@ -89,6 +105,21 @@ def scene_from_dict(data: dict, where: str = 'calibration config') -> CalibScene
             )
         except KeyError as exc:
             raise ValueError(f'{where} boards[{k}]: missing {exc}') from None
+    return boards
+
+
+def scene_from_dict(data: dict, where: str = 'calibration config', folder=None) -> CalibScene:
+    """Build a :class:`CalibScene` from the parsed YAML mapping (``folder``: where a relative ``site`` path is
+    looked up, the current one by default); raises ValueError naming the problem."""
+    if not isinstance(data, dict):
+        raise ValueError(f'{where}: expected a mapping at the top level')
+    _check_keys(where, data, _TOP_KEYS)
+    if 'site' in data:
+        boards, data = _site_scene(data, where, Path(folder or '.'))
+    else:
+        boards = _boards(data, where) if data.get('boards') else []
+    if not boards:
+        raise ValueError(f'{where}: no boards')
     intr = data.get('intrinsics') or {}
     _check_keys(f'{where} intrinsics', intr, {'K', 'dist'})
     if 'K' not in intr or 'image_size' not in data:
@@ -135,4 +166,4 @@ def load_scene(path=None) -> CalibScene:
     path = default_config_path() if not path else Path(path)
     if not path.is_file():
         raise FileNotFoundError(f'calibration config not found: {path}')
-    return scene_from_dict(read_yaml(path), str(path))
+    return scene_from_dict(read_yaml(path), str(path), path.parent)
