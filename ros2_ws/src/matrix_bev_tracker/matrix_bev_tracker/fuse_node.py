@@ -10,6 +10,7 @@ drone published before it matched this node). ``dropped_topic``: a drone's notic
 frame is fused when every view arrived or ``sync_timeout`` wall seconds after its first message (a stopped drone never
 stalls the graph), by ``matrix_core.fusion`` (``view_inputs``, ``fuser.BevFuser``). Every fused frame publishes
 (``matrix_ros.fusion_messages``) tracks, detections (id 0), RViz markers (while subscribed), the BEV heatmap,
+their vision_msgs twins and world -> area on ``/tf_static`` (``matrix_ros.standard_outputs``),
 ``/diagnostics`` and per drone the tracks' image boxes (``matrix_ros.image_outputs``; optionally an overlay). Bad
 input is logged and the view counts as missing. ``~/reset`` (std_srvs/Trigger) starts fresh, as when stamps go back
 by more than ``tracker_reset_gap_s`` (a replay restarted). Images are decoded as they arrive (``decode_early``).
@@ -38,6 +39,7 @@ from matrix_ros.connect import SubscribeWhenConnected
 from matrix_ros.image_outputs import ImageOutputs
 from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
 from matrix_ros.params import declare_settings, spin_node
+from matrix_ros.standard_outputs import StandardOutputs
 from matrix_ros.qos import publisher_qos, qos_by_name
 
 
@@ -63,6 +65,7 @@ class FuseNode(Node):
         if s.heatmap_topic:
             self.pubs['heatmap'] = self.create_publisher(OccupancyGrid, s.heatmap_topic, qos)
         self.image_outputs = ImageOutputs(self, s)
+        self.standard_outputs = StandardOutputs(self, s, self.fuser.bev_settings.area or s.area)
         self.create_service(Trigger, '~/reset', self._on_reset)
         # Sync timeouts run on the wall clock: under /clock in lockstep, sim time stops while the player waits.
         self.create_timer(0.05, self._poll, clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -159,6 +162,7 @@ class FuseNode(Node):
         header = Header(stamp=seconds_to_stamp(frame.stamp), frame_id=s.world_frame)
         self.pubs['tracks'].publish(out.tracks_msg(header, result.tracks))
         self.pubs['detections'].publish(out.detections_msg(header, result.detections, s.frame_interval_s))
+        self.standard_outputs.publish(header, result, s.frame_interval_s)
         if self.pubs['markers'].get_subscription_count():  # for RViz: ~50 messages a frame, ~12 ms of CPU
             self.pubs['markers'].publish(out.markers_msg(header, result.tracks))
         self.image_outputs.publish(header.stamp, frame, result.tracks)

@@ -18,6 +18,7 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from std_msgs.msg import Header
+from tf2_msgs.msg import TFMessage
 
 from matrix_calib.settings import CalibNodeSettings
 from matrix_core import topics
@@ -41,6 +42,7 @@ from matrix_ros.drone_link import DroneLink
 from matrix_ros.node_settings import hosted_drones
 from matrix_ros.params import declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
+from matrix_ros.vision_messages import pose_transform, tf_msg
 
 
 class CalibNode(Node):
@@ -55,6 +57,7 @@ class CalibNode(Node):
         reference = MatrixDataset(s.prior_dataset) if s.prior_dataset else None
         self.calibrators, self.pubs, self.syncs, self.connections = {}, {}, {}, {}
         self.diag_pub = self.create_publisher(diagnostics.DiagnosticArray, topics.DIAGNOSTICS_TOPIC, publisher_qos())
+        self.tf_pub = self.create_publisher(TFMessage, topics.TF_TOPIC, publisher_qos('reliable', 100))
         for view, prefix in hosted_drones(self, s.views):
             self.calibrators[view] = DroneCalibrator(self.scene, s, *self._prior(view, reference))
             self.pubs[view] = (
@@ -172,12 +175,11 @@ class CalibNode(Node):
             return
         if result.camera is not None and (result.status == OK or self.settings.publish_stale):
             info_pub, pose_pub = self.pubs[view]
-            info_pub.publish(
-                camera_to_camera_info(
-                    result.camera, Header(stamp=stamp, frame_id=msg.header.frame_id or topics.optical_frame(view))
-                )
-            )
-            pose_pub.publish(camera_to_pose(result.camera, Header(stamp=stamp, frame_id=self.settings.world_frame)))
+            optical = msg.header.frame_id or topics.optical_frame(view)
+            info_pub.publish(camera_to_camera_info(result.camera, Header(stamp=stamp, frame_id=optical)))
+            pose = camera_to_pose(result.camera, Header(stamp=stamp, frame_id=self.settings.world_frame))
+            pose_pub.publish(pose)
+            self.tf_pub.publish(tf_msg(pose_transform(pose, optical)))  # the same pose, for viewers and tf2
         level = {OK: diagnostics.OK, FAILED: diagnostics.ERROR}.get(result.status, diagnostics.WARN)
         self._diagnose(
             view,

@@ -12,6 +12,10 @@ convention.
 
 WORLD_FRAME = 'world'
 DIAGNOSTICS_TOPIC = '/diagnostics'
+# The pedestrian area's corner (x_min, y_min, 0) with the world's axes (REP 105 style fixed frame, /tf_static).
+AREA_FRAME = 'area'
+TF_TOPIC = '/tf'  # absolute by tf2 convention: calib's camera poses
+TF_STATIC_TOPIC = '/tf_static'  # fuse's fixed frames (world -> area)
 
 # Per-drone streams (relative to the drone).
 IMAGE_RAW = 'image_raw'
@@ -34,6 +38,14 @@ BEV_HEATMAP = 'bev_heatmap'
 PEDESTRIANS_TOPIC = '/ground_truth/pedestrians'
 PEDESTRIAN_IDS_TOPIC = '/ground_truth/pedestrian_ids'
 
+# The outputs again in the standard perception types (vision_msgs), for stacks that know none of ours
+# (docs/standard-interfaces.md): graph-wide, and per drone (``Dn/vision/detections_2d``).
+VISION_TRACKS = 'vision/tracks'  # Detection3DArray, id = the track id
+VISION_DETECTIONS = 'vision/detections'  # Detection3DArray, no id
+VISION_DETECTIONS_2D = 'vision/detections_2d'  # Detection2DArray of a drone's image, id = the fused track id
+PERSON_CLASS_ID = 'person'  # ObjectHypothesis.class_id of every detection (the COCO name detectors use)
+LIVE_VIEW_PORT = 8765  # the live view's Foxglove WebSocket server (ws://HOST:8765)
+
 IMAGE_TYPE = 'sensor_msgs/msg/Image'
 COMPRESSED_TYPE = 'sensor_msgs/msg/CompressedImage'
 CAMERA_INFO_TYPE = 'sensor_msgs/msg/CameraInfo'
@@ -44,6 +56,9 @@ HEADER_TYPE = 'std_msgs/msg/Header'
 HOMOGRAPHY_TYPE = 'matrix_msgs/msg/HomographyStamped'
 TRACK_ARRAY_TYPE = 'matrix_msgs/msg/TrackArray'
 DETECTION_2D_ARRAY_TYPE = 'matrix_msgs/msg/Detection2DArray'
+DETECTION_3D_ARRAY_TYPE = 'vision_msgs/msg/Detection3DArray'
+VISION_DETECTION_2D_ARRAY_TYPE = 'vision_msgs/msg/Detection2DArray'
+TF_TYPE = 'tf2_msgs/msg/TFMessage'
 MARKER_ARRAY_TYPE = 'visualization_msgs/msg/MarkerArray'
 OCCUPANCY_GRID_TYPE = 'nav_msgs/msg/OccupancyGrid'
 DIAGNOSTIC_ARRAY_TYPE = 'diagnostic_msgs/msg/DiagnosticArray'
@@ -63,18 +78,23 @@ DRONE_STREAM_TYPES = {
     DETECTIONS_2D: DETECTION_2D_ARRAY_TYPE,
     OVERLAY_COMPRESSED: COMPRESSED_TYPE,
     GROUND_TRUTH_POSE: POSE_TYPE,
+    VISION_DETECTIONS_2D: VISION_DETECTION_2D_ARRAY_TYPE,
 }
 GRAPH_STREAM_TYPES = {
     TRACKS: TRACK_ARRAY_TYPE,
     DETECTIONS: TRACK_ARRAY_TYPE,
     MARKERS: MARKER_ARRAY_TYPE,
     BEV_HEATMAP: OCCUPANCY_GRID_TYPE,
+    VISION_TRACKS: DETECTION_3D_ARRAY_TYPE,
+    VISION_DETECTIONS: DETECTION_3D_ARRAY_TYPE,
 }
 ABSOLUTE_TOPIC_TYPES = {
     DIAGNOSTICS_TOPIC: DIAGNOSTIC_ARRAY_TYPE,
     PEDESTRIANS_TOPIC: POSE_ARRAY_TYPE,
     PEDESTRIAN_IDS_TOPIC: IDS_TYPE,
     FRAME_DONE_TOPIC: HEADER_TYPE,
+    TF_TOPIC: TF_TYPE,
+    TF_STATIC_TOPIC: TF_TYPE,
 }
 
 
@@ -103,8 +123,8 @@ def topic_type(topic: str) -> str:
     view, _, stream = topic.removeprefix('/').partition('/')
     if topic.startswith('/') and view and stream in DRONE_STREAM_TYPES:
         return DRONE_STREAM_TYPES[stream]
-    if topic.startswith('/') and not stream and view in GRAPH_STREAM_TYPES:
-        return GRAPH_STREAM_TYPES[view]
+    if topic.startswith('/') and topic[1:] in GRAPH_STREAM_TYPES:  # 'tracks', 'vision/tracks'
+        return GRAPH_STREAM_TYPES[topic[1:]]
     raise KeyError(f'{topic!r} is not a topic of matrix_core.topics')
 
 

@@ -1,4 +1,5 @@
-"""The fuse node's per-drone image outputs: ``<view>/detections_2d`` (matrix_msgs/Detection2DArray) and, with
+"""The fuse node's per-drone image outputs: ``<view>/detections_2d`` (matrix_msgs/Detection2DArray), its twin
+``<view>/vision/detections_2d`` (vision_msgs/Detection2DArray, ``matrix_ros.vision_messages``) and, with
 ``overlay``, ``<view>/overlay/compressed`` (the image with the boxes and ids drawn). Boxes and cameras come
 from the core (``matrix_core.fusion.image_outputs``); stamp = the frame's, frame_id = the drone's optical
 frame (``topics.optical_frame``)."""
@@ -6,11 +7,13 @@ frame (``topics.optical_frame``)."""
 from matrix_msgs.msg import Detection2DArray
 from sensor_msgs.msg import CompressedImage
 from std_msgs.msg import Header
+from vision_msgs.msg import Detection2DArray as VisionDetection2DArray
 
 from matrix_core import topics
 from matrix_core.fusion.image_outputs import ViewCameras
 from matrix_core.message_fields import ConversionError, image_from_msg
 from matrix_ros import fusion_messages as out
+from matrix_ros import vision_messages as vm
 from matrix_ros.qos import publisher_qos
 
 
@@ -26,6 +29,10 @@ class ImageOutputs:
             if s.detections_2d_topic
             else {}
         )
+        self.vision = {
+            v: node.create_publisher(VisionDetection2DArray, topics.drone_topic(v, topics.VISION_DETECTIONS_2D), qos)
+            for v in self.boxes
+        }
         self.overlays = (
             {v: node.create_publisher(CompressedImage, s.topic(s.overlay_topic, v), qos) for v in self.boxes}
             if s.overlay
@@ -42,6 +49,7 @@ class ImageOutputs:
         for view, boxes in self.cameras.frame_boxes(geometry, tracks).items():
             header = Header(stamp=stamp, frame_id=topics.optical_frame(view))
             self.boxes[view].publish(out.detections_2d_msg(header, boxes))
+            self.vision[view].publish(vm.detections_2d_msg(header, boxes))
             image = frame.items.get(f'{view}/image')
             if view in self.overlays and image is not None:
                 try:
