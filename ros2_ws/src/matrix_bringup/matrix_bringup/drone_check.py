@@ -4,7 +4,7 @@ the other drones, fuse and the recorder run without it, and the replay's end nam
 
 from dataclasses import replace
 
-from matrix_core.datasets import MatrixDataset
+from matrix_core.datasets import DatasetError, MatrixDataset
 from matrix_core.datasets.drone_inputs import unreadable_drones
 
 LEFT_OUT_EXIT = 5  # run_graph's exit code when every frame played but some drone was left out at start
@@ -13,7 +13,13 @@ LEFT_OUT_EXIT = 5  # run_graph's exit code when every frame played but some dron
 def without_unreadable_drones(settings) -> tuple:
     """(GraphSettings without the drones whose reference cannot be read, view -> why each was left out);
     ValueError when no drone is left."""
-    left_out = unreadable_drones(MatrixDataset(settings.dataset), settings.views)
+    if not settings.dataset:
+        raise ValueError('bag and dataset are required')
+    try:
+        dataset = MatrixDataset(settings.dataset)
+    except DatasetError as exc:  # a settings error like any other: one line before anything starts
+        raise ValueError(f'dataset: {exc}') from None
+    left_out = unreadable_drones(dataset, settings.views)
     if not left_out:
         return settings, {}
     kept = [v for v in settings.views if v not in left_out]

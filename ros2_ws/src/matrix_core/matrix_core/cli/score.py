@@ -6,6 +6,7 @@ GT lines: ``frame id x y``. PRED lines: ``frame id x y`` (tracks: detection AND 
 
 import json
 
+from matrix_core.cli.argument_types import fraction, positive_float
 from matrix_core.metrics import BevPoints, detection_metrics, read_bev_points, tracking_metrics
 from matrix_core.metrics.report import format_metrics
 
@@ -22,9 +23,11 @@ def add_parser(subparsers) -> None:
         default='auto',
         help='how to read PRED; auto: 4 columns with an integer 2nd column are tracks (default: auto)',
     )
-    p.add_argument('--min-score', type=float, default=0.0, help='ignore detections below this score (default: 0)')
-    p.add_argument('--threshold', type=float, default=0.5, help='detection match distance in metres (default: 0.5)')
-    p.add_argument('--gate', type=float, default=1.0, help='tracking match distance in metres (default: 1.0)')
+    p.add_argument('--min-score', type=fraction, default=0.0, help='ignore detections below this score (default: 0)')
+    p.add_argument(
+        '--threshold', type=positive_float, default=0.5, help='detection match distance in metres (default: 0.5)'
+    )
+    p.add_argument('--gate', type=positive_float, default=1.0, help='tracking match distance in metres (default: 1.0)')
     p.add_argument('--json', action='store_true', help='print JSON instead of a table')
     p.set_defaults(func=run)
 
