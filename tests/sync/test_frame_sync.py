@@ -95,19 +95,35 @@ def test_a_stopped_drone_resumes():
 
 
 def test_time_going_back_starts_a_new_sequence_only_beyond_restart_gap():
-    sync = make(timeout=100, restart_gap=2.0)
+    """As the calib node does: its drone's StampRestart (fed what it processed) tells the synchroniser."""
+    from matrix_core.sync import StampRestart
+
+    sync, restart = make(timeout=100), StampRestart(2.0)
+
+    def add(stream, stamp, item):
+        out = []
+        if restart.is_back(stamp):
+            out = sync.restart()  # the old run's pending frames, processed as the old run's
+            for frame in out:
+                restart.went_back(frame.stamp)
+            assert restart.went_back(stamp)  # the new run starts here
+        new = sync.add(stream, stamp, item, now=0)
+        for frame in new:
+            restart.went_back(frame.stamp)  # processed
+        return out + new
+
     for s in STREAMS:
-        sync.add(s, 10.0, s, now=0)
-    sync.add('D1/image', 10.5, 'pending', now=0)
-    assert sync.add('D1/image', 9.0, 'late', now=0) == [] and sync.late_items == 1  # 1 s back: late
-    out = sync.add('D1/image', 1.0, 'new run', now=0)  # 9 s back: a restart
+        add(s, 10.0, s)
+    add('D1/image', 10.5, 'pending')
+    assert add('D1/image', 9.0, 'late') == [] and sync.late_items == 1  # 1 s back: late
+    out = add('D1/image', 1.0, 'new run')  # 9 s back: a restart
     assert [(f.stamp, f.reason) for f in out] == [(10.5, 'restart')] and sync.restarts == 1
     assert sync.pending_stamps == [1.0]
-    out = [f for s in STREAMS[1:] for f in sync.add(s, 1.0, s, now=0)]
+    out = [f for s in STREAMS[1:] for f in add(s, 1.0, s)]
     assert [(f.stamp, f.reason) for f in out] == [(1.0, 'complete')]
     assert out[0].items['D1/image'] == 'new run'
     with pytest.raises(ValueError):
-        FrameSyncSettings(streams=STREAMS, restart_gap=0)
+        StampRestart(0)
 
 
 def test_stamp_restart():

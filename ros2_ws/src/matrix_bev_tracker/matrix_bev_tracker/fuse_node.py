@@ -13,7 +13,7 @@ stalls the graph), by ``matrix_core.fusion`` (``view_inputs``, ``fuser.BevFuser`
 their vision_msgs twins and world -> area on ``/tf_static`` (``matrix_ros.standard_outputs``),
 ``/diagnostics`` and per drone the tracks' image boxes (``matrix_ros.image_outputs``; optionally an overlay). Bad
 input is logged and the view counts as missing. ``~/reset`` (std_srvs/Trigger) starts fresh, as when stamps go back
-by more than ``tracker_reset_gap_s`` (a replay restarted). Images are decoded as they arrive (``decode_early``).
+by more than ``restart_gap_s`` (a replay restarted). Images are decoded as they arrive (``decode_early``).
 """
 
 import time
@@ -32,8 +32,8 @@ from matrix_bev_tracker.settings import LIVE_PARAMETERS, FuseNodeSettings
 from matrix_core import topics
 from matrix_core.fusion.fuser import BevFuser
 from matrix_core.fusion.view_inputs import ImageNotSent, ViewInputs
-from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
 from matrix_core.fusion.views import FrameStatus
+from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
 from matrix_ros import fusion_messages as out
 from matrix_ros.connect import SubscribeWhenConnected
 from matrix_ros.image_outputs import ImageOutputs
@@ -115,14 +115,13 @@ class FuseNode(Node):
         streams = [f'{v}/{part}' for v in s.views for part in ('image', 'geometry')]
         self.sync = FrameSynchronizer(FrameSyncSettings(streams, s.sync_timeout, s.stamp_tolerance))
         self.late_reported = 0
-        self.last_fused = None
         self.fuser.reset()
 
     def _add(self, view: str, part: str, msg) -> None:
         stamp, now = stamp_to_seconds(msg.header.stamp), time.monotonic()
-        if self.last_fused is not None and stamp < self.last_fused - self.settings.tracker_reset_gap_s:
+        if self.fuser.restart.is_back(stamp):  # compared with the frames fused: a lagging drone is only late
             self.get_logger().warning(
-                f't={stamp:.3f} s is {self.last_fused - stamp:.1f} s before the last fused frame: '
+                f't={stamp:.3f} s is {self.fuser.restart.newest - stamp:.1f} s before the last fused frame: '
                 'time went back, starting fresh (a replay restarted: a new sequence)'
             )
             self._start_fresh()
@@ -158,7 +157,6 @@ class FuseNode(Node):
         failed = [st.reason for st in result.views.values() if st.status == FrameStatus.FUSION_FAILED]
         if failed:
             self.get_logger().error(f't={frame.stamp:.3f} s: fusion failed: {failed[0]}; publishing no detections')
-        self.last_fused = frame.stamp
         header = Header(stamp=seconds_to_stamp(frame.stamp), frame_id=s.world_frame)
         self.pubs['tracks'].publish(out.tracks_msg(header, result.tracks))
         self.pubs['detections'].publish(out.detections_msg(header, result.detections, s.frame_interval_s))

@@ -70,10 +70,9 @@ class FuseNodeSettings(NodeSettings, ImageBoxSettings, FuseSettings):
         },
     )
 
-    def __post_init__(self):
+    def check(self) -> None:
         if self.geometry_qos not in GEOMETRY_QOS:
             raise ValueError(f'geometry_qos must be one of {", ".join(GEOMETRY_QOS)}, got {self.geometry_qos!r}')
-        super().__post_init__()
 
 
 # What `ros2 param set /fuse NAME VALUE` may change while the node runs (the node reads them each frame);

@@ -2,6 +2,8 @@
 
 from dataclasses import dataclass, field
 
+from matrix_core.settings import check_area
+
 from matrix_core import topics
 from matrix_core.datasets.matrix_conventions import MATRIX_AREA, MATRIX_VIEWS
 
@@ -43,5 +45,4 @@ class GraphMonitorSettings:
         unknown = set(self.wait_for) - set(STAGES)
         if unknown or not self.wait_for:
             raise ValueError(f'wait_for must list some of {STAGES}, got {self.wait_for}')
-        if len(self.area) != 4 or self.area[0] >= self.area[2] or self.area[1] >= self.area[3]:
-            raise ValueError(f'area must be x_min y_min x_max y_max, got {self.area}')
+        check_area(self.area)

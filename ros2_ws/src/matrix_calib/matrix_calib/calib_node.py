@@ -84,9 +84,7 @@ class CalibNode(Node):
         """Its images, and registrations (``use_registration``; the images once those have a publisher)."""
         s = self.settings
         if s.use_registration:
-            self.syncs[view] = FrameSynchronizer(
-                FrameSyncSettings(['image', 'registration'], s.registration_wait_s, restart_gap=s.restart_gap_s)
-            )
+            self.syncs[view] = FrameSynchronizer(FrameSyncSettings(['image', 'registration'], s.registration_wait_s))
         if self.link.shared:
             return
 
@@ -131,18 +129,29 @@ class CalibNode(Node):
         item = (msg, received or time.perf_counter(), image)  # image: decoded by register in this process, else None
         if view not in self.syncs:
             return self._calibrate(view, *item)
-        self._synced(view, self.syncs[view].add('image', stamp_to_seconds(msg.header.stamp), item, time.monotonic()))
+        stamp = stamp_to_seconds(msg.header.stamp)
+        self._restart_sync(view, stamp)
+        self._synced(view, self.syncs[view].add('image', stamp, item, time.monotonic()))
 
     def _on_registration(self, view: str, msg: HomographyStamped):
         sync, stamp = self.syncs.get(view), stamp_to_seconds(msg.header.stamp)
         if sync is None:  # not guided by registrations (use_registration false)
             return
+        self._restart_sync(view, stamp)
         late, frames = sync.late_items, sync.add('registration', stamp, msg, time.monotonic())  # late: before adding
         if sync.late_items > late:
             self.get_logger().warning(
                 f'{view}: registration of t={stamp:.3f} s came after its image was calibrated without it; ignored'
             )
         self._synced(view, frames)
+
+    def _restart_sync(self, view: str, stamp: float) -> None:
+        """Time went back (by the drone's calibrator's detector, fed what it calibrated): the old run's pending
+        images are calibrated first, then the calibrator and the synchroniser start the new run afresh."""
+        calibrator = self.calibrators[view]
+        if calibrator.restart.is_back(stamp):
+            self._synced(view, self.syncs[view].restart())
+            calibrator.check_restart(stamp)
 
     def _poll(self):
         for view, sync in self.syncs.items():

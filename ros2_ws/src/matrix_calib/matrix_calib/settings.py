@@ -17,8 +17,9 @@ class CalibNodeSettings(NodeSettings, CalibSettings):
             'node runs in); empty = the one drone of the node namespace'
         },
     )
-    compressed: bool = field(default=False, metadata={'help': 'subscribe image/compressed instead of image_raw'})
-    qos: str = field(default='sensor_data', metadata={'help': 'QoS of the image subscription: sensor_data or reliable'})
+    compressed: bool = field(
+        default=False, metadata={'help': 'subscribe <V>/image/compressed (JPEG) instead of the raw image'}
+    )
     world_frame: str = field(default=WORLD_FRAME, metadata={'help': 'frame_id of the published pose'})
     publish_stale: bool = field(
         default=True,
@@ -63,8 +64,7 @@ class CalibNodeSettings(NodeSettings, CalibSettings):
         },
     )
 
-    def __post_init__(self):
-        super().__post_init__()
+    def check(self) -> None:
         if self.registration_wait_s <= 0:
             raise ValueError('registration_wait_s must be positive')
         if self.thread_niceness < -1:

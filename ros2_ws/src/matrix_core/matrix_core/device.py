@@ -12,6 +12,8 @@ import re
 import sys
 from dataclasses import dataclass, field
 
+from matrix_core.settings import Settings
+
 DEVICE_CHOICES = ('auto', 'cpu', 'cuda', 'cuda:N')
 DEFAULT_DEVICE = 'auto'
 _CUDA = re.compile(r'cuda(?::(\d+))?')
@@ -22,7 +24,7 @@ class DeviceError(ValueError):
 
 
 @dataclass
-class DeviceSettings:
+class DeviceSettings(Settings):
     """The device of the BEV network (its encoder, lifting, aggregation, heads and peak finding)."""
 
     device: str = field(
@@ -33,10 +35,8 @@ class DeviceSettings:
         },
     )
 
-    def __post_init__(self):
+    def check(self) -> None:
         check_device(self.device)
-        if hasattr(super(), '__post_init__'):  # composed with other settings (the fuse node's)
-            super().__post_init__()
 
 
 def _cuda_index(spec: str):

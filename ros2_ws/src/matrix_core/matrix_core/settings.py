@@ -10,6 +10,25 @@ from pathlib import Path
 import yaml
 
 
+@dataclasses.dataclass
+class Settings:
+    """The one base of the settings dataclasses that are put together (a node's: its wiring and its component's;
+    fuse's: device, restarts, tracker). Each class validates its own fields in ``check``; ``__post_init__`` runs
+    every class's ``check`` once, bases first, so that no class hands over to another (no ``super()`` chain)."""
+
+    def __post_init__(self):
+        for cls in reversed(type(self).__mro__):
+            check = vars(cls).get('check')
+            if check is not None:
+                check(self)
+
+
+def check_area(area, name: str = 'area') -> None:
+    """The one check of a scene area setting: x_min y_min x_max y_max (metres), min < max."""
+    if len(area) != 4 or area[0] >= area[2] or area[1] >= area[3]:
+        raise ValueError(f'{name} must be x_min y_min x_max y_max, got {list(area)}')
+
+
 def read_yaml(path) -> dict:
     """The mapping in a YAML config file ({} for an empty file); ValueError naming the file when it is not
     valid YAML or not a mapping, FileNotFoundError when it does not exist."""

@@ -5,17 +5,17 @@ from dataclasses import dataclass, field
 
 from matrix_core.datasets.matrix_conventions import MATRIX_AREA
 from matrix_core.register.settings import RegisterSettings
-from matrix_core.sync import RestartSettings
+from matrix_core.settings import check_area
 from matrix_ros.node_settings import NodeSettings
 
 
 @dataclass
-class RegisterNodeSettings(NodeSettings, RestartSettings, RegisterSettings):
+class RegisterNodeSettings(NodeSettings, RegisterSettings):
     views: list[str] = field(
-        default_factory=lambda: ['D1'],
+        default_factory=list,
         metadata={
-            'help': 'drones handled by this node; topics are <view>/... (relative: remappable, namespaceable; bare '
-            'for the drone whose namespace the node runs in; empty: that one drone)'
+            'help': 'drones hosted by this process, topics <V>/... (relative; bare for the drone whose namespace the '
+            'node runs in); empty = the one drone of the node namespace'
         },
     )
     reference_dataset: str = field(
@@ -32,13 +32,13 @@ class RegisterNodeSettings(NodeSettings, RestartSettings, RegisterSettings):
         },
     )
     image_topic: str = field(default='image_raw', metadata={'help': 'image stream under <view>/'})
-    compressed: bool = field(default=False, metadata={'help': 'subscribe <view>/image/compressed instead'})
+    compressed: bool = field(
+        default=False, metadata={'help': 'subscribe <V>/image/compressed (JPEG) instead of the raw image'}
+    )
     camera_info_topic: str = field(
         default='camera_info',
         metadata={'help': 'CameraInfo stream under <view>/ (used only without reference_dataset)'},
     )
 
-    def __post_init__(self):
-        super().__post_init__()
-        if len(self.area) != 4 or self.area[0] >= self.area[2] or self.area[1] >= self.area[3]:
-            raise ValueError(f'area must be x_min y_min x_max y_max, got {self.area}')
+    def check(self) -> None:
+        check_area(self.area)

@@ -1,7 +1,7 @@
 """The wiring settings every processing node shares, validated once.
 
-A node's settings dataclass is ``class XNodeSettings(NodeSettings, XSettings)``: NodeSettings first, so that
-its ``__post_init__`` checks the wiring and then hands over to the core settings' own validation.
+A node's settings dataclass is ``class XNodeSettings(NodeSettings, XSettings)``: the node's wiring and its
+component's settings on one shared base (``matrix_core.settings.Settings``), each class checking its own fields.
 """
 
 from dataclasses import dataclass, field
@@ -9,11 +9,12 @@ from dataclasses import dataclass, field
 import cv2
 from threadpoolctl import threadpool_limits
 
+from matrix_core.settings import Settings
 from matrix_ros.qos import QOS_NAMES, qos_by_name
 
 
 @dataclass
-class NodeSettings:
+class NodeSettings(Settings):
     qos: str = field(
         default='reliable',
         metadata={
@@ -29,12 +30,10 @@ class NodeSettings:
         },
     )
 
-    def __post_init__(self):
+    def check(self) -> None:
         qos_by_name(self.qos)  # raises naming the valid names
         if self.threads < 1:
             raise ValueError(f'threads must be >= 1, got {self.threads}')
-        if hasattr(super(), '__post_init__'):
-            super().__post_init__()
 
     def apply_threads(self) -> None:
         """Limit OpenCV's and numpy's BLAS worker pools of this process to ``threads``.

@@ -112,7 +112,8 @@ class DroneCalibrator:
         self.scene = scene
         self.settings = settings
         self.initial = (initial_prior, initial_image)
-        self.restart = StampRestart(settings.restart_gap_s)
+        self.restart = StampRestart(settings.restart_gap_s)  # fed the stamps of the images processed
+        self.went_back = False  # time went back: the next result says it started afresh
         self.start_afresh()
 
     def start_afresh(self) -> None:
@@ -124,6 +125,14 @@ class DroneCalibrator:
         self.last_good = None
         self.last_good_stamp = None
         self.image_motion = PriorImageMotion(self.settings, None if initial_image is None else _gray(initial_image))
+
+    def check_restart(self, stamp: float) -> None:
+        """Start afresh when ``stamp`` (seconds) is more than ``restart_gap_s`` before the images processed (a
+        replay started over); :meth:`process` calls it, a node may call it first (before its synchroniser
+        takes the new run's messages)."""
+        if self.restart.went_back(stamp):  # the old run's last pose is no prior for the new run's first frame
+            self.start_afresh()
+            self.went_back = True
 
     @property
     def previous_features(self):
@@ -152,9 +161,8 @@ class DroneCalibrator:
         camera predicts the boards (a prior independent of earlier frames) and the image motion is not
         measured."""
         t_start = time.perf_counter()
-        restarted = self.restart.went_back(stamp)
-        if restarted:  # the old run's last pose is no prior for the new run's first frame
-            self.start_afresh()
+        self.check_restart(stamp)
+        restarted, self.went_back = self.went_back, False
         # Every RANSAC below draws from OpenCV's global RNG: seeding it per image makes the result depend on
         # this image and this drone's history only, not on other drones sharing the process.
         cv2.setRNGSeed(self.settings.seed)

@@ -192,8 +192,7 @@ class CalibSettings(RestartSettings):
         },
     )
 
-    def __post_init__(self):
-        super().__post_init__()
+    def check(self) -> None:
         if self.pattern_size < 3:
             raise ValueError('pattern_size must be >= 3')
         if self.px_per_square < 3 or self.margin_cells < 0 or self.initial_margin_cells < 0:

@@ -16,6 +16,7 @@ from matrix_core.bev.lifting import feat_H_grid
 from matrix_core.device import resolve_device
 from matrix_core.fusion.settings import FuseSettings
 from matrix_core.fusion.views import FrameStatus, ViewInput, ViewInputError, check_image
+from matrix_core.sync.stamp_restart import StampRestart
 from matrix_core.tracking import BevDetections, BevTracker
 
 
@@ -43,10 +44,10 @@ class ViewStatus:
     reason: str = ''
     confidence: float = None
 
-
     @property
     def available(self) -> bool:
         return self.status == FrameStatus.USED
+
 
 @dataclass
 class FuseResult:
@@ -92,6 +93,7 @@ class BevFuser:
         self.runner = SequenceRunner(self.model, bev_settings, self.grid)
         self.tracker = BevTracker(settings.tracker_settings())
         self._temporal_lost = False  # prepare_next failed: the next frame reports the temporal reset
+        self.restart = StampRestart(settings.restart_gap_s)  # fed the stamps of the frames processed
         self.reset()
 
     def warm_up(self) -> float:
@@ -118,6 +120,7 @@ class BevFuser:
         self.runner.reset()
         self.tracker.reset()
         self.last_stamp = None
+        self.restart.forget()
         self.frame_count = 0
         self._born = {}  # track id -> frame count at birth
 
@@ -127,9 +130,11 @@ class BevFuser:
         if self.last_stamp is None:
             return ['temporal'] if lost else []
         gap = stamp - self.last_stamp
-        if gap <= 0 or gap > s.tracker_reset_gap_s:
+        if self.restart.is_back(stamp) or gap > s.tracker_reset_gap_s:  # a new run, or frames lost for long
             self.reset()
             return ['temporal', 'tracker']
+        if gap <= 0:
+            raise ValueError(f'frame at t={stamp:.3f} s is not after the last one at t={self.last_stamp:.3f} s')
         if gap > s.temporal_reset_gap_s or lost:
             self.runner.reset()
             return ['temporal']
@@ -200,6 +205,7 @@ class BevFuser:
         tracks = self._track(dets)
         t3 = time.perf_counter()
         self.last_stamp = stamp
+        self.restart.note(stamp)
         self.frame_count += 1
         timing = {'prepare_s': t1 - t0, 'network_s': t2 - t1, 'track_s': t3 - t2, 'total_s': t3 - t0}
         return FuseResult(stamp, dets, tracks, heatmap, status, timing, resets)

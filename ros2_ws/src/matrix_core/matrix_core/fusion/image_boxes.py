@@ -30,12 +30,13 @@ from matrix_core.geometry.homography import implied_camera
 from matrix_core.geometry.occlusion import as_boxes, segments_blocked
 from matrix_core.register.scene import scene_from_meta
 from matrix_core.register.settings import MATRIX_BLOCK
+from matrix_core.settings import Settings
 
 OUTLINE_POINTS = 16  # points per circle of the cylinder's outline
 
 
 @dataclass
-class ImageBoxSettings:
+class ImageBoxSettings(Settings):
     """The person model and the visibility rule of the image boxes (module docstring)."""
 
     person_radius_m: float = field(
@@ -78,14 +79,12 @@ class ImageBoxSettings:
         },
     )
 
-    def __post_init__(self):
+    def check(self) -> None:
         if self.person_radius_m <= 0 or self.person_height_m <= 0:
             raise ValueError('person_radius_m and person_height_m must be positive')
         if not (0.0 < self.person_occlusion <= 1.0 and 0.0 < self.min_in_image <= 1.0):
             raise ValueError('person_occlusion and min_in_image must be in (0, 1]')
         as_boxes(self.obstacle_boxes)
-        if hasattr(super(), '__post_init__'):  # settings composed with others (the fuse node's)
-            super().__post_init__()
 
 
 @dataclass(frozen=True)

@@ -6,6 +6,8 @@ from pathlib import Path
 from matrix_core import topics
 from matrix_core.datasets.matrix_conventions import MATRIX_AREA, MATRIX_VIEWS
 from matrix_core.device import DeviceSettings
+from matrix_core.settings import check_area
+from matrix_core.sync.stamp_restart import RestartSettings
 from matrix_core.tracking.settings import TrackerSettings
 
 INPUT_KINDS = ('homography', 'camera_info')
@@ -34,7 +36,7 @@ def resolve_checkpoint(checkpoint: str) -> Path:
 
 
 @dataclass
-class FuseSettings(DeviceSettings, TrackerSettings):
+class FuseSettings(DeviceSettings, RestartSettings, TrackerSettings):
     """Everything the fusion of N views needs. Seconds, metres. ``frame_interval_s`` (from the tracker
     settings) is the frame period of the streams; ``device`` (``matrix_core.device``) where the network runs."""
 
@@ -109,11 +111,10 @@ class FuseSettings(DeviceSettings, TrackerSettings):
     )
     tracker_reset_gap_s: float = field(
         default=5.0,
-        metadata={'help': 'reset the tracker (ids restart) when frames are further apart than this or time goes back'},
+        metadata={'help': 'reset the tracker (ids restart) when frames are further apart than this (forward)'},
     )
 
-    def __post_init__(self):
-        super().__post_init__()
+    def check(self) -> None:
         if not self.views or len(set(self.views)) != len(self.views):
             raise ValueError(f'views must name distinct drones, got {self.views}')
         if self.image_kind not in IMAGE_KINDS:
@@ -123,8 +124,7 @@ class FuseSettings(DeviceSettings, TrackerSettings):
         for name in ('image_topic', 'compressed_topic', 'homography_topic', 'camera_info_topic', 'dropped_topic'):
             if '{view}' not in getattr(self, name) and (getattr(self, name) or name != 'dropped_topic'):
                 raise ValueError(f'{name} must contain {{view}}, got {getattr(self, name)!r}')
-        if len(self.area) != 4 or self.area[0] >= self.area[2] or self.area[1] >= self.area[3]:
-            raise ValueError(f'area must be x_min y_min x_max y_max, got {self.area}')
+        check_area(self.area)
         if self.sync_timeout < 0 or self.threads < 1 or self.temporal_reset_gap_s <= 0 or self.tracker_reset_gap_s <= 0:
             raise ValueError('sync_timeout >= 0, threads >= 1 and the reset gaps > 0 are required')
 

@@ -4,6 +4,7 @@ of the ``register`` node, same names and defaults)."""
 from dataclasses import dataclass, field
 
 from matrix_core.site.shipped import matrix_site
+from matrix_core.sync.stamp_restart import RestartSettings
 
 # The real MATRIX scene's central block, internal world metres: x0, y0, x1, y1 (footprint), height; the
 # obstacles of the shipped MATRIX site file.
@@ -11,7 +12,7 @@ MATRIX_BLOCK = matrix_site().obstacle_boxes
 
 
 @dataclass
-class RegisterSettings:
+class RegisterSettings(RestartSettings):
     backend: str = field(
         default='sift',
         metadata={
@@ -193,7 +194,7 @@ class RegisterSettings:
         },
     )
 
-    def __post_init__(self):
+    def check(self) -> None:
         from matrix_core.register.backends import BACKENDS
 
         if self.backend not in BACKENDS:

@@ -4,7 +4,6 @@ Convention: stamps and clocks are seconds (floats). ``now`` is whatever clock th
 (ROS time, which follows ``/clock`` under ``use_sim_time``); only differences of ``now`` matter.
 """
 
-import math
 from dataclasses import dataclass, field
 
 
@@ -21,19 +20,12 @@ class FrameSyncSettings:
         default=0.001, metadata={'help': 'stamps closer than this (seconds) belong to the same frame'}
     )
     max_pending: int = field(default=16, metadata={'help': 'frames kept waiting at most; the oldest is emitted first'})
-    restart_gap: float = field(
-        default=math.inf,
-        metadata={
-            'help': 'an item this many seconds older than the last emitted frame starts a new sequence (a replay '
-            'started over) instead of being refused as late; inf: never'
-        },
-    )
 
     def __post_init__(self):
         if len(set(self.streams)) != len(self.streams):
             raise ValueError(f'duplicate stream names in {self.streams}')
-        if self.timeout < 0 or self.stamp_tolerance < 0 or self.max_pending < 1 or not self.restart_gap > 0:
-            raise ValueError('timeout and stamp_tolerance must be >= 0, max_pending >= 1, restart_gap > 0')
+        if self.timeout < 0 or self.stamp_tolerance < 0 or self.max_pending < 1:
+            raise ValueError('timeout and stamp_tolerance must be >= 0, max_pending >= 1')
 
 
 @dataclass
@@ -45,7 +37,8 @@ class SyncedFrame:
         items: stream name -> item.
         missing: required streams that did not arrive (sorted).
         reason: 'complete', 'timeout' (waited ``timeout``), 'superseded' (a newer frame completed first),
-            'overflow' (more than ``max_pending`` frames waiting) or 'restart' (a new sequence began).
+            'overflow' (more than ``max_pending`` frames waiting) or 'restart' (a new sequence began:
+            :meth:`FrameSynchronizer.restart`).
         first_arrival: ``now`` when its first item arrived (the caller's clock): how long the frame waited.
     """
 
@@ -69,9 +62,9 @@ class FrameSynchronizer:
     A frame is emitted when all required streams arrived, when ``timeout`` passed since its first item,
     when a newer frame completes (older frames cannot complete any more in an ordered replay), or when
     too many frames are pending. An item older than the last emitted frame is refused and counted in
-    ``late_items`` (the caller logs it); nothing is dropped silently. An item older by more than
-    ``restart_gap`` starts a new sequence: what was pending is emitted first (reason 'restart'), then the
-    item is taken as the first of the new sequence (``restarts`` counts them).
+    ``late_items`` (the caller logs it); nothing is dropped silently. When the caller's
+    :class:`~matrix_core.sync.stamp_restart.StampRestart` says time went back, :meth:`restart` emits what was
+    pending and takes the next items as a new sequence (``restarts`` counts them).
     """
 
     def __init__(self, settings: FrameSyncSettings):
@@ -98,9 +91,6 @@ class FrameSynchronizer:
         if stream not in self.settings.streams:
             raise KeyError(f'unknown stream {stream!r}; configured: {self.settings.streams}')
         out = []
-        if self._last_emitted is not None and stamp < self._last_emitted - self.settings.restart_gap:
-            out = [self._emit(self._pending[0], 'restart') for _ in range(len(self._pending))]
-            self._last_emitted, self.restarts = None, self.restarts + 1
         if self._last_emitted is not None and stamp <= self._last_emitted + self.settings.stamp_tolerance:
             self.late_items += 1
             return out
@@ -116,6 +106,13 @@ class FrameSynchronizer:
             out.append(self._emit(pending, 'complete'))
         while len(self._pending) > self.settings.max_pending:
             out.append(self._emit(self._pending[0], 'overflow'))
+        return out
+
+    def restart(self) -> list:
+        """A new sequence begins (time went back): the frames still pending, oldest first (reason 'restart');
+        the next items are refused as late only against the new sequence's frames."""
+        out = [self._emit(self._pending[0], 'restart') for _ in range(len(self._pending))]
+        self._last_emitted, self.restarts = None, self.restarts + 1
         return out
 
     def poll(self, now: float) -> list:

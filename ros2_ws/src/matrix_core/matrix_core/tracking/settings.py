@@ -2,9 +2,11 @@
 
 from dataclasses import dataclass, field
 
+from matrix_core.settings import Settings
+
 
 @dataclass
-class TrackerSettings:
+class TrackerSettings(Settings):
     """ByteTrack-style association of ground-plane detections. Distances in metres, times in seconds.
 
     The defaults were chosen on validation sequences only (simulated seeds 111-114 and the real sample frames
@@ -59,7 +61,7 @@ class TrackerSettings:
         default=True, metadata={'help': 'associate with the detections\' tracking offsets (CenterTrack) when present'}
     )
 
-    def __post_init__(self):
+    def check(self) -> None:
         for name in ('gate_m', 'frame_interval_s', 'accel_noise', 'measurement_noise_m'):
             if not getattr(self, name) > 0:
                 raise ValueError(f'{name} must be positive, got {getattr(self, name)}')
