@@ -80,7 +80,11 @@ def check_no_unknown_parameters(node, names, shared=()) -> None:
     declared later, by the publishers, and are left to rclpy."""
     import difflib
 
-    declared = set(node._parameters)  # rclpy keeps what was given and what was declared, no public getter
+    declared = set(node.list_parameters([], 0).names)  # depth 0 with no prefix: every declared name
+    # What was given (-p, --params-file) has no public getter in rclpy: Node.__init__ keeps it in
+    # Node._parameter_overrides (rclcpp has NodeOptions::parameter_overrides()). The public route,
+    # automatically_declare_parameters_from_overrides=True, would declare every given name untyped before
+    # declare_settings can type it, in every node class; until rclpy has a getter this one private read stays.
     given = getattr(node, '_parameter_overrides', {})
     unknown = sorted(n for n in given if n not in declared and n not in shared and not n.startswith('qos_overrides.'))
     if unknown:
