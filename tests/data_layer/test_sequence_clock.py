@@ -104,6 +104,7 @@ def test_evaluate_recording_takes_the_clock_from_the_sequence_bag(tmp_path):
                 '1.75',
                 '--json',
                 str(out),
+                '--overwrite',
             ]
         )
         == 0
