@@ -13,6 +13,8 @@ from pathlib import Path
 
 import torch
 
+from matrix_core.reference_size import REFERENCE_WIDTH
+
 
 class StepUnavailable(Exception):
     """The step cannot run in this checkout (e.g. a calibration source that does not exist yet)."""
@@ -96,7 +98,7 @@ def run_calibrate(p: dict, out: Path, run_dir: Path, progress: bool, log) -> Non
 def run_register(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
     # The registration defaults are tuned on 1920x1080 (scale 0.25 = 480x270): keep that working size.
     # estimator/seed: magsac (the live default) or one seeded plain-RANSAC run (run-to-run variation).
-    scale = min(1.0, 0.25 * 1920 / p['image_size'][0])
+    scale = min(1.0, 0.25 * REFERENCE_WIDTH / p['image_size'][0])
     _cli(
         [
             'register',

@@ -3,7 +3,7 @@ and measure each against the ground truth from the stored calibrations (tests, s
 
 Images smaller than the paper's 1920x1080 get the settings that see the same 480x270 feature image and the
 same full-resolution inlier threshold, and their errors are reported in FULL-RESOLUTION-EQUIVALENT pixels
-(pixels of the folder's images x 1920 / width), so the criteria (median <= 0.5 px, worst <= 3 px) read
+(pixels of the folder's images x REFERENCE_WIDTH / width), so the criteria (median <= 0.5 px, worst <= 3 px) read
 the same at every size.
 """
 
@@ -18,14 +18,13 @@ from matrix_core.register.evaluate import homography_error_px
 from matrix_core.register.registrar import Registrar
 from matrix_core.register.scene import settings_for_dataset
 from matrix_core.register.settings import RegisterSettings
-
-FULL_WIDTH = 1920
+from matrix_core.reference_size import REFERENCE_WIDTH
 
 
 def settings_for_width(settings: RegisterSettings, width: int) -> RegisterSettings:
     """``settings`` (chosen for 1920-px images) for images ``width`` px wide: same feature-image size and
     the same inlier threshold in full-resolution-equivalent pixels."""
-    factor = FULL_WIDTH / width
+    factor = REFERENCE_WIDTH / width
     return replace(
         settings,
         scale=min(1.0, settings.scale * factor),
@@ -50,7 +49,7 @@ def acceptance_run(dataset, settings: RegisterSettings = None, views=None, frame
     settings = settings_for_width(settings or RegisterSettings(), width)
     settings, _ = settings_for_dataset(settings, dataset)
     backend = make_backend(settings)
-    factor = FULL_WIDTH / width
+    factor = REFERENCE_WIDTH / width
     failed, errors, seconds, cpu, tracked, anchors_by_flow = {}, [], [], [], 0, 0
     with tqdm(total=len(views) * len(frames), desc='register', unit='pair', disable=not progress) as bar:
         for view in views:

@@ -18,8 +18,7 @@ import cv2
 import numpy as np
 
 from matrix_core.geometry.camera import Camera
-
-FULL_WIDTH = 1920  # noise and JPEG quality are specified for a full-resolution (1920 x 1080) camera
+from matrix_core.reference_size import REFERENCE_WIDTH
 
 
 @dataclass(frozen=True)
@@ -163,15 +162,16 @@ class CameraEffects:
 
 def noise_std_lut(e: DroneEffects, width: int) -> np.ndarray:
     """(256,) float32 noise standard deviation per grey level at an output ``width``: the sensor noise is
-    given at 1920 px and averaging the full-resolution pixels down to ``width`` divides it by 1920 / width."""
-    scale = min(1.0, width / FULL_WIDTH)
+    given at REFERENCE_WIDTH and averaging the full-resolution pixels down to ``width`` divides it by
+    REFERENCE_WIDTH / width."""
+    scale = min(1.0, width / REFERENCE_WIDTH)
     return (scale * np.sqrt(e.noise_sigma**2 + e.shot_noise * np.arange(256))).astype(np.float32)
 
 
 def effective_jpeg_quality(quality: int, width: int) -> int:
     """JPEG quality at an output ``width`` that leaves artefacts like ``quality`` at 1920 px seen
-    downsampled: 8 x 8 blocks would be 1920 / width times coarser, so the loss (100 - quality) shrinks."""
-    return int(round(100 - (100 - quality) * min(1.0, width / FULL_WIDTH)))
+    downsampled: 8 x 8 blocks would be REFERENCE_WIDTH / width times coarser, so the loss (100 - quality) shrinks."""
+    return int(round(100 - (100 - quality) * min(1.0, width / REFERENCE_WIDTH)))
 
 
 def tone_lut(gains, gamma: float, contrast: float) -> np.ndarray:

@@ -20,11 +20,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from matrix_core.geometry.camera import Camera, pose_matrix
+from matrix_core.reference_size import REFERENCE_WIDTH
 
 GRAVITY = 9.81
 CONTROL_DT = 0.05  # seconds per control tick
 AIM_RELAX_S = 3.0  # time constant of the wandering aimed point
-REFERENCE_WIDTH = 1920  # pixel errors are measured at this width (the paper's capture size)
 # Home directions of D1..D8 in the internal frame, from the real reference poses (file y is negated).
 HOME_DIRECTIONS = np.array([[-1, 1], [0, 1], [1, 1], [1, 0], [1, -1], [0, -1], [-1, -1], [-1, 0]], dtype=float)
 

@@ -25,6 +25,7 @@ import numpy as np
 from matrix_core.datasets import MatrixWriter
 from matrix_core.datasets.matrix_conventions import view_name, world_to_position_id
 from matrix_core.datasets.types import PersonAnnotation
+from matrix_core.reference_size import REFERENCE_WIDTH
 from matrix_core.sim.appearance import person_looks
 from matrix_core.sim.camera_effects import CameraEffects
 from matrix_core.sim.config import load_scene_config, scene_config_to_dict
@@ -40,7 +41,7 @@ from matrix_core.sim.visibility import line_of_sight, rays_blocked
 
 def ground_m_per_px(width: int) -> float:
     """Ground texel size for a render width: 2.5 cm at 1920 px, proportionally coarser below."""
-    return 0.025 * max(1.0, 1920.0 / width)
+    return 0.025 * max(1.0, REFERENCE_WIDTH / width)
 
 
 class Simulation:

@@ -3,6 +3,7 @@
 from dataclasses import dataclass, field
 
 from matrix_core.bags.clock import DEFAULT_CLOCK
+from matrix_core.reference_size import REFERENCE_HEIGHT, REFERENCE_WIDTH
 
 
 @dataclass
@@ -16,8 +17,8 @@ class SimulateSettings:
         default=0, metadata={'help': 'random seed: the same seed gives the same sequence (byte-identical annotations)'}
     )
     out: str = field(default='out/sim', metadata={'help': 'output MATRIX folder (must be empty or absent)'})
-    width: int = field(default=1920, metadata={'help': 'image width in pixels (the paper used 1920x1080)'})
-    height: int = field(default=1080, metadata={'help': 'image height in pixels'})
+    width: int = field(default=REFERENCE_WIDTH, metadata={'help': 'image width in pixels (the paper used 1920x1080)'})
+    height: int = field(default=REFERENCE_HEIGHT, metadata={'help': 'image height in pixels'})
     fast: bool = field(default=False, metadata={'help': 'fast low-resolution mode: 640x360 (overrides width/height)'})
     image_ext: str = field(default='.png', metadata={'help': '.png (lossless) or .jpg (smaller, faster)'})
     bag: bool = field(default=False, metadata={'help': 'also write a rosbag2 (MCAP) into OUT/bag'})
