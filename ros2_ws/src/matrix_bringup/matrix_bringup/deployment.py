@@ -74,7 +74,7 @@ STREAMS = {
     topics.POSE: (topics.POSE_TYPE, 'reliable', 'tiny; recorded for evaluation'),
     topics.GROUND_TRUTH_CAMERA_INFO: (topics.CAMERA_INFO_TYPE, 'reliable', 'tiny; only the monitor reads it'),
     topics.DIAGNOSTICS_TOPIC: (
-        'diagnostic_msgs/msg/DiagnosticArray',
+        topics.DIAGNOSTIC_ARRAY_TYPE,
         'reliable',
         ("calib's and register's status per frame (~1 kB): why a view failed, recorded on the ground"),
     ),

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import yaml
 
+from matrix_core import topics
 from matrix_core.bags.salvage import topic_counts
 from matrix_core.datasets.matrix_conventions import MATRIX_VIEWS
 from matrix_core.settings import setting_to_string
@@ -34,19 +35,9 @@ from matrix_core.settings import setting_to_string
 _log = logging.getLogger(__name__)
 
 VIEWS = list(MATRIX_VIEWS)
-RECORDED = (
-    ('/tracks', 'matrix_msgs/msg/TrackArray'),
-    ('/detections', 'matrix_msgs/msg/TrackArray'),
-    ('/bev_heatmap', 'nav_msgs/msg/OccupancyGrid'),
-    ('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray'),
-)
-PER_VIEW_RECORDED = (
-    ('camera_info', 'sensor_msgs/msg/CameraInfo'),
-    ('pose', 'geometry_msgs/msg/PoseStamped'),
-    ('homography', 'matrix_msgs/msg/HomographyStamped'),
-    ('detections_2d', 'matrix_msgs/msg/Detection2DArray'),
-)
-OVERLAY_RECORDED = ('overlay/compressed', 'sensor_msgs/msg/CompressedImage')  # with GraphSettings.overlay
+RECORDED = (*map(topics.graph_topic, (topics.TRACKS, topics.DETECTIONS, topics.BEV_HEATMAP)), topics.DIAGNOSTICS_TOPIC)
+PER_VIEW_RECORDED = (topics.CAMERA_INFO, topics.POSE, topics.HOMOGRAPHY, topics.DETECTIONS_2D)
+OVERLAY_RECORDED = topics.OVERLAY_COMPRESSED  # with GraphSettings.overlay
 DRONE_NODES = ('calib', 'register')  # the nodes of a drone process (matrix_bringup.drone)
 
 
@@ -267,26 +258,28 @@ class BagFacts:
     def read(cls, bag: str, views) -> 'BagFacts':
         if not (Path(bag) / 'metadata.yaml').is_file():
             raise FileNotFoundError(f'not a rosbag2 folder (no metadata.yaml): {bag!r}')
-        topics, damage = topic_counts(bag)  # a damaged bag: what it holds before the damage (the player plays
+        counts, damage = topic_counts(bag)  # a damaged bag: what it holds before the damage (the player plays
         if damage:  # that and exits with code 4)
             _log.warning(f'{damage}: replaying the frames before the damage')
-        imaged = {t.split('/')[1] for t in topics if t.endswith(('/image_raw', '/image/compressed'))}
+        imaged = {
+            n.split('/')[1] for n in counts if n.endswith(('/' + topics.IMAGE_RAW, '/' + topics.IMAGE_COMPRESSED))
+        }
         unknown = [v for v in views if v not in imaged]
         if unknown:
             raise ValueError(
                 f'{bag}: no images of view(s) {", ".join(unknown)} in this bag; '
                 f'it has images of {", ".join(sorted(imaged)) or "no view"}'
             )
-        raw = [topics[t][1] for v in views if (t := f'/{v}/image_raw') in topics]
-        compressed = [topics[t][1] for v in views if (t := f'/{v}/image/compressed') in topics]
+        raw = [counts[n][1] for v in views if (n := topics.image_topic(v)) in counts]
+        compressed = [counts[n][1] for v in views if (n := topics.image_topic(v, compressed=True)) in counts]
         if len(raw) + len(compressed) != len(views) or (raw and compressed):
             raise ValueError(
                 f'{bag}: expected one image topic per view ({views}), all raw or all compressed; '
-                f'it has {sorted(t for t in topics if "image" in t)}'
+                f'it has {sorted(n for n in counts if "image" in n)}'
             )
-        gt = all(f'/{v}/ground_truth/camera_info' in topics for v in views)
-        drone = [t.split('/')[1] for t in topics]  # '/D3/image_raw' -> 'D3'
-        played = tuple(sorted(t for t, d in zip(topics, drone) if d in views or not re.fullmatch(r'D\d+', d)))
+        gt = all(topics.camera_info_topic(v) in counts for v in views)
+        drone = [n.split('/')[1] for n in counts]  # '/D3/image_raw' -> 'D3'
+        played = tuple(sorted(n for n, d in zip(counts, drone) if d in views or not re.fullmatch(r'D\d+', d)))
         return cls(bool(compressed), max(raw or compressed), gt, played)
 
 
@@ -380,7 +373,7 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
     )
     if s.record:
         per_view = PER_VIEW_RECORDED + ((OVERLAY_RECORDED,) if s.overlay else ())
-        topics = [*RECORDED, *((f'/{v}/{t}', m) for v in s.views for t, m in per_view)]
+        recorded = [*RECORDED, *(topics.absolute(v, stream) for v in s.views for stream in per_view)]
         nodes.append(
             NodeSpec(
                 'matrix_ros',
@@ -389,9 +382,9 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
                 '',
                 {
                     'out': s.record,
-                    'topics': [t for t, _ in topics],
-                    'types': [m for _, m in topics],
-                    'tracks_topic': '/tracks',
+                    'topics': recorded,
+                    'types': [topics.topic_type(n) for n in recorded],
+                    'tracks_topic': topics.graph_topic(topics.TRACKS),
                     'sequence_bag': str(s.bag),
                     **sim,
                 },
@@ -425,10 +418,7 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
         **({'topics': list(bag.topics)} if bag.topics else {}),
     }
     if s.lockstep:
-        player.update(
-            {'lockstep_topic': '/graph_monitor/frame_done', 'lockstep_type': 'std_msgs/msg/Header'}
-            if s.monitor
-            else {'lockstep_topic': '/tracks', 'lockstep_type': 'matrix_msgs/msg/TrackArray'}
-        )
+        done = topics.FRAME_DONE_TOPIC if s.monitor else topics.graph_topic(topics.TRACKS)
+        player.update({'lockstep_topic': done, 'lockstep_type': topics.topic_type(done)})
     nodes.append(NodeSpec('matrix_ros', 'bag_player', 'bag_player', '', player))
     return nodes

@@ -41,8 +41,6 @@ from matrix_ros.executor import make_executor
 from matrix_ros.params import declare_settings, parse_node_args
 from matrix_ros.qos import publisher_qos, qos_by_name
 
-FRAME_DONE_TOPIC = '/graph_monitor/frame_done'
-
 
 class GraphMonitor(Node):
     def __init__(self, defaults: GraphMonitorSettings):
@@ -82,7 +80,7 @@ class GraphMonitor(Node):
         )
         if 'tracks' in s.wait_for:
             self.create_subscription(TrackArray, s.tracks_topic, self._tracks, history)
-        self.frame_done_pub = self.create_publisher(Header, FRAME_DONE_TOPIC, publisher_qos())
+        self.frame_done_pub = self.create_publisher(Header, topics.FRAME_DONE_TOPIC, publisher_qos())
         self.processed = {}  # stamp -> {(stage, view)} seen; view '' for tracks
         self.needed = {(stage, v) for stage in s.wait_for if stage != 'tracks' for v in s.views}
         self.needed |= {('tracks', '')} if 'tracks' in s.wait_for else set()

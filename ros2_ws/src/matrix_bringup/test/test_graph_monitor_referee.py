@@ -10,7 +10,6 @@ from matrix_msgs.msg import TrackArray
 from rclpy.node import Node
 from std_msgs.msg import Header
 
-from matrix_bringup.graph_monitor import FRAME_DONE_TOPIC
 from matrix_core import topics
 from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
 from matrix_ros.qos import publisher_qos, qos_by_name
@@ -45,7 +44,7 @@ def test_a_frame_is_done_only_when_every_part_arrived_and_a_late_one_is_named(no
     diagnostics = node.create_publisher(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, publisher_qos())
     tracks = node.create_publisher(TrackArray, topics.TRACKS, publisher_qos())
     frame_done = node.create_subscription(
-        Header, FRAME_DONE_TOPIC, lambda m: done.append(stamp_to_seconds(m.stamp)), qos_by_name('history')
+        Header, topics.FRAME_DONE_TOPIC, lambda m: done.append(stamp_to_seconds(m.stamp)), qos_by_name('history')
     )
     try:
         wait_matched(node, [diagnostics, tracks, frame_done], [monitor], 60)

@@ -21,9 +21,6 @@ from matrix_core.bags.clock import SequenceClock, read_sequence_clock
 from matrix_core.bags.messages import stamp_ns
 from matrix_core.metrics import BevPoints, detection_metrics, read_bev_points, tracking_metrics
 
-TRACK_ARRAY = 'matrix_msgs/msg/TrackArray'
-OCCUPANCY_GRID = 'nav_msgs/msg/OccupancyGrid'
-
 
 @dataclass
 class Recording:
@@ -47,7 +44,10 @@ class RecordingScores:
 
 
 def read_recording_bag(
-    path, tracks_topic='/tracks', detections_topic='/detections', clock: SequenceClock = None
+    path,
+    tracks_topic=bag_topics.graph_topic(bag_topics.TRACKS),
+    detections_topic=bag_topics.graph_topic(bag_topics.DETECTIONS),
+    clock: SequenceClock = None,
 ) -> Recording:
     """Tracks, detections and the heatmap grid bounds from a recorder bag (topics missing -> None).
 
@@ -60,14 +60,14 @@ def read_recording_bag(
     with AnyReader([Path(path)]) as reader:
         topics = {c.topic: c.msgtype for c in reader.connections}
         for topic in (tracks_topic, detections_topic):
-            if topic in topics and topics[topic] != TRACK_ARRAY:
-                raise ValueError(f'{path}: {topic} is {topics[topic]}, expected {TRACK_ARRAY}')
+            if topic in topics and topics[topic] != bag_topics.TRACK_ARRAY_TYPE:
+                raise ValueError(f'{path}: {topic} is {topics[topic]}, expected {bag_topics.TRACK_ARRAY_TYPE}')
         for conn, _, raw in reader.messages(connections=reader.connections):
-            if conn.msgtype not in (TRACK_ARRAY, OCCUPANCY_GRID):
+            if conn.msgtype not in (bag_topics.TRACK_ARRAY_TYPE, bag_topics.OCCUPANCY_GRID_TYPE):
                 continue
             msg = reader.deserialize(raw, conn.msgtype)
             frame = clock.frame_ns(stamp_ns(msg.header))
-            if conn.msgtype == OCCUPANCY_GRID:
+            if conn.msgtype == bag_topics.OCCUPANCY_GRID_TYPE:
                 i = msg.info
                 x0, y0 = i.origin.position.x, i.origin.position.y
                 area = (x0, y0, x0 + i.width * i.resolution, y0 + i.height * i.resolution)
