@@ -11,11 +11,7 @@ import re
 from pathlib import Path
 
 import pytest
-import yaml
 
-from matrix_bringup.deployment import STREAMS, deployment
-from matrix_bringup.graph import BagFacts, GraphSettings, graph_nodes
-from matrix_core import topics
 from tests.test_core_purity import imported_modules
 
 SRC = Path(__file__).resolve().parents[1] / 'ros2_ws' / 'src'
@@ -51,12 +47,9 @@ ONE_HOME = {
     'reading an image file': (r'cv2\.imread\(', {'matrix_core/matrix_core/datasets/base.py'}),
     'CameraInfo -> Camera': (r'np\.linalg\.solve\(\s*K\s*,\s*P', {'matrix_core/matrix_core/geometry/camera.py'}),
     'homography validity (condition number)': (r'linalg\.cond\(', {'matrix_core/matrix_core/register/registration.py'}),
+    'absolute per-drone topic names': (r"f'/\{view\}/", {'matrix_core/matrix_core/topics.py'}),
     'the MATRIX area': (r'-30\.0,\s*30\.0,\s*0\.0', set()),
     'the encoder stride': (r'(?i)stride\s*=\s*4\b', {'matrix_core/matrix_core/bev/encoder.py'}),
-    'the reference image width': (
-        r'[/*]\s*1920\b|\b1920(\.0)?\s*[/*]|=\s*1920\b',
-        {'matrix_core/matrix_core/reference_size.py'},
-    ),
 }
 
 
@@ -74,108 +67,9 @@ def test_one_home_detector_sees_a_copy(tmp_path):
         'reading an image file': 'cv2.imread(str(p))',
         'CameraInfo -> Camera': 'Rt = np.linalg.solve(K, P)',
         'homography validity (condition number)': 'np.linalg.cond(H) > 1e12',
+        'absolute per-drone topic names': "f'/{view}/homography'",
         'the MATRIX area': '[0.0, -30.0, 30.0, 0.0]',
         'the encoder stride': 'STRIDE = 4',
-        'the reference image width': 'scale = width / 1920',
     }
     for concept, text in samples.items():
         assert re.search(ONE_HOME[concept][0], text), concept
-
-
-# (topic parameter, type parameter or None): the parameters of the graph's nodes that name topics
-TOPIC_PARAMETERS = (('lockstep_topic', 'lockstep_type'), ('start_topic', None))
-VIEWS = ['D1', 'D5']
-BAG = BagFacts(
-    compressed=True,
-    frames=5,
-    has_ground_truth=True,
-    topics=tuple(
-        sorted(
-            [topics.PEDESTRIANS_TOPIC, topics.PEDESTRIAN_IDS_TOPIC]
-            + [f(v) for v in VIEWS for f in (topics.camera_info_topic, topics.pose_topic)]
-            + [topics.image_topic(v, compressed=True) for v in VIEWS]
-        )
-    ),
-)
-
-
-def _absolute(name: str, namespace: str, views) -> list:
-    """The absolute names a node in ``namespace`` resolves ``name`` (a '{view}' pattern: for every view) to."""
-    # (a node in a drone's namespace reads that drone's streams by their bare names: topics.drone_topic)
-    names = [topics.drone_topic('' if v == namespace else v, name.replace('{view}/', '')) for v in views]
-    names = names if '{view}/' in name else [name]
-    return [n if n.startswith('/') else f'/{namespace}/{n}'.replace('//', '/') for n in names]
-
-
-def _wired(node) -> list:
-    """(absolute topic, type or None, where) of every topic a NodeSpec names: in its parameters and in its
-    parameter files (``*_topic`` and the recorder's ``topics`` / ``types``)."""
-    params = dict(node.parameters)
-    for path in node.param_files:
-        for section in (yaml.safe_load(Path(path).read_text()) or {}).values():
-            params = {**section.get('ros__parameters', {}), **params}
-    views = params.get('views') or [node.namespace]
-    recorded = params.get('topics', ())
-    types = params.get('types') or [None] * len(recorded)
-    out = [(n, m, f'{node.label} topics') for n, m in zip(recorded, types)]
-    paired = dict(TOPIC_PARAMETERS)
-    for key, value in params.items():
-        if key.endswith('_topic') and value:
-            type_name = params.get(paired.get(key) or '')
-            out += [(n, type_name, f'{node.label} {key}') for n in _absolute(value, node.namespace, views)]
-    return out
-
-
-def _graph(name: str, dataset: str) -> list:
-    """The NodeSpecs of one way of running the graph."""
-    with_all = GraphSettings(bag='b', dataset=dataset, views=VIEWS, record='rec', monitor=True, overlay=True)
-    if name == 'deployed over hosts':
-        deployed = deployment(GraphSettings(bag='b', dataset=dataset, views=VIEWS, record='rec'), BAG)
-        return [n for nodes in deployed.hosts.values() for n in nodes]
-    settings = {
-        'one host, lockstep on the monitor': with_all,
-        'one host, lockstep on the tracks': GraphSettings(bag='b', dataset=dataset, views=VIEWS, record='rec'),
-        'one process per node': GraphSettings(
-            bag='b', dataset=dataset, views=VIEWS, drone_process=False, record='rec', drones_per_process=0
-        ),
-    }[name]
-    return graph_nodes(settings, BAG)
-
-
-GRAPHS = (
-    'one host, lockstep on the monitor',
-    'one host, lockstep on the tracks',
-    'one process per node',
-    'deployed over hosts',
-)
-
-
-@pytest.mark.parametrize('graph', GRAPHS)
-def test_every_topic_the_graph_wires_is_defined_in_topics(graph, matrix_sample):
-    """Names and types of the graph built by ``graph.py`` (and its deployment) are those of ``topics.py``."""
-    wired = [w for node in _graph(graph, str(matrix_sample)) for w in _wired(node)]
-    assert len(wired) > 10, wired
-    unknown, mistyped = [], []
-    for name, type_name, where in wired:
-        try:
-            expected = topics.topic_type(name)
-        except KeyError:
-            unknown.append(f'{where}: {name}')
-            continue
-        if type_name is not None and type_name != expected:
-            mistyped.append(f'{where}: {name} is {type_name}, topics.py says {expected}')
-    assert not unknown and not mistyped, unknown + mistyped
-
-
-def test_link_streams_have_the_types_of_topics():
-    for stream, (type_name, *_) in STREAMS.items():
-        name = stream if stream.startswith('/') else topics.absolute('D1', stream)
-        assert topics.topic_type(name) == type_name, stream
-
-
-def test_topic_lookup_refuses_what_topics_does_not_define():
-    assert topics.topic_type(topics.absolute('D3', topics.HOMOGRAPHY)) == topics.HOMOGRAPHY_TYPE
-    assert topics.topic_type(topics.graph_topic(topics.TRACKS)) == topics.TRACK_ARRAY_TYPE
-    for name in ('/D1/homographies', '/tracks/D1', 'tracks', '/D1', '/detections_2d'):
-        with pytest.raises(KeyError, match='not a topic'):
-            topics.topic_type(name)

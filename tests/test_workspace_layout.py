@@ -7,7 +7,15 @@ from pathlib import Path
 import pytest
 
 SRC = Path(__file__).resolve().parents[1] / 'ros2_ws' / 'src'
-REQUIRED = ('matrix_core', 'matrix_ros', 'matrix_calib', 'matrix_register', 'matrix_bev_tracker', 'matrix_msgs')
+REQUIRED = (
+    'matrix_core',
+    'matrix_ros',
+    'matrix_calib',
+    'matrix_register',
+    'matrix_bev_tracker',
+    'matrix_live_view',
+    'matrix_msgs',
+)
 PYTHON_PACKAGES = [p for p in REQUIRED if p != 'matrix_msgs']
 
 
