@@ -157,6 +157,7 @@ def test_a_bad_frame_fails_alone(matrix_sample, tmp_path, capsys):
 
 
 def test_registration_folder_without_records_is_an_error(matrix_sample, tmp_path, capsys):
+    (tmp_path / 'reg').mkdir()  # beside the output: an output inside an input is refused for that alone
     assert (
         main(
             [
@@ -165,7 +166,7 @@ def test_registration_folder_without_records_is_an_error(matrix_sample, tmp_path
                 '--out',
                 str(tmp_path / 'out'),
                 '--registration',
-                str(tmp_path),
+                str(tmp_path / 'reg'),
                 '--views',
                 'D5',
                 '--max-frames',
