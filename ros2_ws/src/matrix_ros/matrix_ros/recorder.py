@@ -26,8 +26,10 @@ from rclpy.node import Node
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
+from matrix_core import topics
 from matrix_core.bags.clock import SequenceClock, read_sequence_clock
-from matrix_ros.conversions import stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
+from matrix_core.metrics.bev_points import BevPoints, bev_point_lines
 from matrix_ros.message_types import message_class
 from matrix_ros.params import declare_settings, spin_node
 from matrix_ros.qos import qos_by_name
@@ -110,7 +112,7 @@ class Recorder(Node):
         for key, value in self.clock.custom_data().items():
             self.writer.set_custom_data(key, value)
         self.writer.open()
-        self.counts = {}
+        self.counts, self.unflushed = {}, 0
         for topic, type_name in zip(s.topics, s.types):
             conn = self.writer.add_connection(topic, type_name, typestore=store)
             self.counts[topic] = 0
@@ -125,30 +127,40 @@ class Recorder(Node):
         if s.tracks_topic:
             self.mot = open(s.mot_file or f'{s.out}.tracks.txt', 'w')
             self.create_subscription(
-                message_class('matrix_msgs/msg/TrackArray'), s.tracks_topic, self._tracks, qos_by_name(s.qos, 100)
+                message_class(topics.TRACK_ARRAY_TYPE), s.tracks_topic, self._tracks, qos_by_name(s.qos, 100)
             )
         if s.flush_period_s > 0:  # wall time: under use_sim_time the bag's clock may stop or go back
             self.create_timer(s.flush_period_s, self.flush, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(f'recording {len(s.topics)} topics to {s.out}; frames: {self.clock.describe()}')
 
     def flush(self) -> None:
-        """Put the messages received so far on disk as a finished MCAP chunk. rosbags keeps up to 1 MiB in
-        memory and writes the file's index only on close: a recorder killed (SIGKILL, power) would lose all of
-        a slow stream. Its chunks on disk are read back by ``matrix_core.bags.salvage`` (this uses the
-        MCAP storage's own chunk writer; rosbags is pinned in constraints.txt)."""
-        storage = getattr(self.writer, 'storage', None)
-        if storage is not None and getattr(storage, 'chunk', None) is not None and storage.chunk.msgs:
-            storage.close_chunk()
-            storage.bio.flush()
+        """Put the messages received since the last flush on disk as a finished MCAP chunk. rosbags keeps up
+        to 1 MiB in memory and writes the file's index only on close: a recorder killed (SIGKILL, power) would
+        lose all of a slow stream. Its chunks on disk are read back by ``matrix_core.bags.salvage``.
+
+        rosbags' public ``Writer`` has no ``flush()`` (0.11, pinned in constraints.txt): this calls the two
+        members of its MCAP storage that one would be, ``close_chunk()`` (what ``write`` calls at 1 MiB; a
+        chunk without messages is harmless) and the flush of its file, and reads nothing of its state."""
+        if self.unflushed:
+            self.writer.storage.close_chunk()
+            self.writer.storage.bio.flush()
+            self.unflushed = 0
 
     def _write(self, conn, topic, raw: bytes):
         self.writer.write(conn, self.get_clock().now().nanoseconds, raw)
         self.counts[topic] += 1
+        self.unflushed += 1
 
     def _tracks(self, msg):
-        frame = self.clock.frame(stamp_to_seconds(msg.header.stamp))
-        for track in msg.tracks:
-            self.mot.write(f'{frame} {track.id} {track.position.x:.4f} {track.position.y:.4f}\n')
+        stamp = stamp_seconds(msg.header.stamp)
+        frame = self.clock.frame(stamp)
+        finite = [math.isfinite(t.position.x) and math.isfinite(t.position.y) for t in msg.tracks]
+        tracks = [t for t, ok in zip(msg.tracks, finite) if ok]
+        if not all(finite):  # a track without a position cannot be scored: said, the others written
+            bad = [t.id for t, ok in zip(msg.tracks, finite) if not ok]
+            self.get_logger().error(f'{self.settings.tracks_topic} t={stamp:.3f} s: track(s) {bad} not finite')
+        xy = [(t.position.x, t.position.y) for t in tracks]
+        self.mot.write(bev_point_lines(BevPoints([frame] * len(xy), xy, ids=[t.id for t in tracks])))
         self.mot.flush()
 
     def close(self):

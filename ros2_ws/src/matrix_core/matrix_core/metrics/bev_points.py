@@ -121,14 +121,23 @@ def read_bev_points(path, with_ids: bool = None) -> BevPoints:
     return BevPoints(table[:, 0], table[:, 1:3], scores=scores)
 
 
-def write_bev_points(path, points: BevPoints) -> None:
-    """Write ``frame id x y`` (points with ids) or ``frame x y score`` lines, sorted by frame (stable)."""
-    order = np.argsort(points.frames, kind='stable')
+def bev_point_lines(points: BevPoints) -> str:
+    """The text of ``points`` in their order, a line each: ``frame id x y`` (points with ids) or
+    ``frame x y score`` (what :func:`read_bev_points` reads; written whole or a frame at a time)."""
     lines = []
-    for i in order:
+    for i in range(len(points)):
         x, y = points.xy[i]
         if points.has_ids:
-            lines.append(f'{points.frames[i]} {points.ids[i]} {x:.4f} {y:.4f}')
+            lines.append(f'{points.frames[i]} {points.ids[i]} {x:.4f} {y:.4f}\n')
         else:
-            lines.append(f'{points.frames[i]} {x:.4f} {y:.4f} {points.scores[i]:.4f}')
-    atomic_write_text(path, ''.join(line + '\n' for line in lines))
+            lines.append(f'{points.frames[i]} {x:.4f} {y:.4f} {points.scores[i]:.4f}\n')
+    return ''.join(lines)
+
+
+def write_bev_points(path, points: BevPoints) -> None:
+    """Write the lines of :func:`bev_point_lines`, sorted by frame (stable)."""
+    order = np.argsort(points.frames, kind='stable')
+    ids = None if points.ids is None else points.ids[order]
+    atomic_write_text(
+        path, bev_point_lines(BevPoints(points.frames[order], points.xy[order], ids, points.scores[order]))
+    )
