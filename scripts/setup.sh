@@ -14,10 +14,12 @@ fi
 
 # Reinstall packages only when the requirement files change.
 stamp="$VENV/.requirements.sha256"
-want=$(cat requirements.txt constraints.txt | sha256sum | cut -d' ' -f1)
+want=$(cat requirements.txt requirements-nodeps.txt constraints.txt | sha256sum | cut -d' ' -f1)
 if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
   echo "setup: installing pinned packages (constraints.txt)"
   "$VENV/bin/pip" install --disable-pip-version-check -q -c constraints.txt -r requirements.txt
+  # Packages whose declared dependencies clash with ours (requirements-nodeps.txt says why), pinned too.
+  "$VENV/bin/pip" install --disable-pip-version-check -q --no-deps -c constraints.txt -r requirements-nodeps.txt
   echo "$want" > "$stamp"
 fi
 
