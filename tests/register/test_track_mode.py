@@ -154,7 +154,7 @@ def test_the_refinement_repeats_until_a_poor_prediction_converges(dataset, monke
     0.08 px). Refined at 960x540 (the default, one pyramid level), the passes end within a few hundredths of a
     pixel (measured 0.005 px; one pass 0.02, and 0.1-0.4 px from predictions 12-25 px off)."""
     from matrix_core.register import flow_tracking
-    from matrix_core.register.flow_tracking import TrackState
+    from matrix_core.register.flow_tracking import FlowStart
 
     (_, image), truth = [x[0] for x in _moved_reference(dataset, 'D6', [(10, 6, 0.3)])]
     ref = dataset.reference_camera('D6')
@@ -173,7 +173,7 @@ def test_the_refinement_repeats_until_a_poor_prediction_converges(dataset, monke
             0.0,
             MATRIX_BLOCK,
         )
-        state = TrackState(reference.anchor, reference.images, reference.corners, off)
+        state = FlowStart(reference.anchor, reference.images, reference.corners, off)
         for passes in (1, flow_tracking.REFINE_PASSES):
             monkeypatch.setattr(flow_tracking, 'REFINE_PASSES', passes)
             step = tracker.step(state, tracker.reduce(image))

@@ -99,7 +99,7 @@ class Anchor:
 
 
 @dataclass(frozen=True)
-class TrackState:
+class FlowStart:
     """The last registered frame, what the next frame's flow starts from.
 
     Attributes:
@@ -212,7 +212,7 @@ class FlowTracker:
         area,
         margin_m: float,
         boxes,
-    ) -> TrackState:
+    ) -> FlowStart:
         """Start a chain at a fully registered frame: its ``images``, the camera its registration implies (full
         resolution) and the scene ground (``area`` grown by ``margin_m``, not behind ``boxes``). Corners are
         detected in the flow image."""
@@ -223,9 +223,9 @@ class FlowTracker:
         corners = xy[keep].reshape(-1, 1, 2).astype(np.float32)
         refine = apply_homography(self.refine_H_full, full[keep]).reshape(-1, 1, 2).astype(np.float32)
         anchor = Anchor(images, refine, ref_H_img, chain, inliers)
-        return TrackState(anchor, images, corners, np.eye(3))
+        return FlowStart(anchor, images, corners, np.eye(3))
 
-    def step(self, state: TrackState, images: TrackImages) -> FlowStep:
+    def step(self, state: FlowStart, images: TrackImages) -> FlowStep:
         """Register the frame of ``images`` from ``state`` (flow, then refinement against the anchor)."""
 
         def failed(reason, prev_H_cur=None, tracked=0):

@@ -24,7 +24,7 @@ from matrix_core.geometry.camera import Camera
 from matrix_core.register.backends import make_backend
 from matrix_core.register.features import Features
 from matrix_core.register.fit import fit_homography
-from matrix_core.register.flow_tracking import FlowTracker, TrackImages, TrackState, registered_camera
+from matrix_core.register.flow_tracking import FlowStart, FlowTracker, TrackImages, registered_camera
 from matrix_core.register.gate import check_registration
 from matrix_core.register.ground_mask import ground_mask
 from matrix_core.register.matching import match_symmetric
@@ -81,7 +81,7 @@ class Registrar:
         self.tracker = FlowTracker(
             s.scale, s.track_corners, s.ransac_threshold_px, s.estimator, s.seed, s.track_refine_scale
         )
-        self._track = None  # TrackState of the last registered frame (mode track), None: next one anchors
+        self._track = None  # the FlowStart of the last registered frame (mode track), None: next one anchors
         # mode track, anchor_by_flow: the reference as a chain's anchor (its reduced images and ground corners)
         self._reference_track = None
         self._flow_anchor_failures = 0  # anchors by flow that did not hold in a row
@@ -225,7 +225,7 @@ class Registrar:
             return None, f'chain doubted: {reason}', None
         self._previous_center, self._frames_since_good = implied.center, 1
         steps = state.steps + 1
-        self._track = TrackState(anchor, images, step.corners, step.anchor_H_cur, steps, step.prev_H_cur)
+        self._track = FlowStart(anchor, images, step.corners, step.anchor_H_cur, steps, step.prev_H_cur)
         return (
             self._result(
                 RegistrationStatus.OK,
@@ -259,7 +259,7 @@ class Registrar:
         return result, why_not
 
     def _flow_to_reference(self, images: TrackImages, frame_id, start, state, reference) -> tuple:
-        """:meth:`_anchor_by_flow` from ``state`` (or the reference's own TrackState when None)."""
+        """:meth:`_anchor_by_flow` from ``state`` (or the reference's own FlowStart when None)."""
         s = self.settings
         if state is not None:  # the previous frame, seen from the reference: the flow predicts ref_H_cur
             state = replace(state, anchor=reference.anchor, anchor_H_img=state.anchor.ref_H_img @ state.anchor_H_img)
