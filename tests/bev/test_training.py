@@ -99,10 +99,11 @@ def test_train_resume_and_evaluate_cli(matrix_sample, tmp_path, monkeypatch, cap
         == 0
     )
     text = capsys.readouterr().out
-    assert 'MODA (@0.5 m)' in text and 'IDF1' in text
+    assert 'MODA (@0.5 m)' in text and 'IDF1' in text and 'HOTA (@1 m)' in text
     metrics = json.loads((ev / 'metrics.json').read_text())
     assert metrics['views'] == ['D1', 'D3', 'D4', 'D5', 'D7', 'D8']
     assert metrics['detection']['num_gt'] == 80
+    assert metrics['hota']['num_gt'] == 80 and metrics['hota']['num_pred'] == metrics['tracking']['num_pred']
     for png in ['trajectories.png', 'heatmap_0003.png']:
         assert (ev / png).read_bytes()[:4] == b'\x89PNG'
 

@@ -105,6 +105,7 @@ def test_ground_truth_scores_perfectly(sequence_bag, tmp_path):
     )
     m = json.loads(out.read_text())
     assert m['tracking']['mota'] == 1.0 and m['detection']['moda'] == 1.0 and m['detections_source'] == 'tracks'
+    assert m['hota']['hota'] == 1.0 and m['hota']['ass_a'] == 1.0 and m['hota']['gate'] == 1.0
 
 
 def test_recorder_bag_with_a_lost_frame(sequence_bag, tmp_path):
@@ -119,4 +120,7 @@ def test_recorder_bag_with_a_lost_frame(sequence_bag, tmp_path):
     m = json.loads(out.read_text())
     assert m['frames_without_tracks'] == [1] and m['detections_source'] == 'detections'
     assert m['detection']['recall'] == pytest.approx(2 / 3) and m['detection']['precision'] == 1.0
+    # a lost frame costs detection, not association: DetA = DetRe = 2/3 (one frame of three missed), AssA < 1
+    assert m['hota']['det_a'] == pytest.approx(2 / 3) and m['hota']['det_pr'] == 1.0
+    assert m['hota']['ass_a'] < 1.0 and m['hota']['hota'] == pytest.approx(np.sqrt(2 / 3 * m['hota']['ass_a']))
     assert cli(['evaluate-recording', str(tmp_path / 'nothing'), '--ground-truth', str(sequence_bag)]) == 2

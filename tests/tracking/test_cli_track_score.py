@@ -55,12 +55,17 @@ def test_track_then_score(files, capsys):
     assert trk['fn'] >= 40 and trk['num_gt'] == 60 * 40
     assert trk['mota'] > 0.85 and trk['idf1'] > 0.85
     assert report['detection']['moda'] > 0.85
+    hota = report['hota']
+    assert 0.5 < hota['hota'] < 1.0 and hota['num_gt'] == trk['num_gt'] and hota['num_pred'] == trk['num_pred']
+    assert main(['score', str(files / 'gt.txt'), str(files / 'tracks.txt')]) == 0
+    text = capsys.readouterr().out
+    assert f"{100 * hota['hota']:6.2f} %" in text.split('HOTA (@1 m)')[1].splitlines()[0]
 
 
 def test_score_detections_only_and_table(files, capsys):
     assert main(['score', str(files / 'gt.txt'), str(files / 'dets.txt')]) == 0
     text = capsys.readouterr().out
-    assert 'MODA (@0.5 m)' in text and 'MOTA' not in text
+    assert 'MODA (@0.5 m)' in text and 'MOTA' not in text and 'HOTA' not in text
     moda = float(text.split('MODA (@0.5 m)')[1].split('%')[0])
     assert 90 < moda < 96  # about 5 % dropped + one empty frame of 60
 

@@ -6,7 +6,7 @@ import numpy as np
 
 from matrix_core.bev.data import ground_truth_positions
 from matrix_core.bev.inference import run_frames
-from matrix_core.metrics import BevPoints, detection_metrics, tracking_metrics
+from matrix_core.metrics import BevPoints, detection_metrics, hota_metrics, tracking_metrics
 from matrix_core.tracking import BevDetections, BevTracker, TrackerSettings
 
 
@@ -21,6 +21,7 @@ class EvaluationResult:
     track_detections: BevPoints = None  # the tracks at their detection of each frame (image boxes)
     failed_frames: dict = field(default_factory=dict)  # frame -> why it was not scored
     masked_views: dict = field(default_factory=dict)  # (view, frame) -> why that view was masked there
+    hota: object = None  # HotaMetrics of the tracks
 
     @property
     def scored_frames(self) -> list:
@@ -156,4 +157,5 @@ def track_and_score(
         BevPoints(t_frames, np.reshape(t_det_xy, (-1, 2)), ids=t_ids, scores=t_scores),
         dict(sorted((failed or {}).items())),
         dict(masked_views or {}),
+        hota_metrics(gt, tracks, gate),
     )

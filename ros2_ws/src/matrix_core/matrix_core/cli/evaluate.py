@@ -118,7 +118,7 @@ def run(args) -> int:
     )
     if not result.outputs:
         raise ValueError(f'no frame could be evaluated:\n{result.failures_text()}')
-    print(format_metrics(result.detection, result.tracking))
+    print(format_metrics(result.detection, result.tracking, result.hota))
     if result.failures_text():
         print(result.failures_text())
     out.mkdir(parents=True, exist_ok=True)
@@ -135,6 +135,7 @@ def run(args) -> int:
             {
                 'detection': result.detection.as_dict(),
                 'tracking': result.tracking.as_dict(),
+                'hota': result.hota.as_dict(),
                 'image_plane': image_plane.as_dict() if image_plane else None,
                 'calibration': args.calibration,
                 'views': views,

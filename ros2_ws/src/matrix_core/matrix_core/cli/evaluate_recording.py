@@ -5,7 +5,7 @@ REC is the ``recorder``'s bag folder (matrix_msgs/TrackArray tracks and detectio
 (``frame id x y``). SEQUENCE_BAG is the bag that was replayed (``/ground_truth/pedestrians``). Frames are
 ``round((stamp - start) / period)`` with the sequence clock stored in SEQUENCE_BAG (``--start-time`` and
 ``--frame-period`` override it; bags written before the clock was stored get 1.0 s and 0.5 s). Detection
-metrics are of the detections when recorded (else of the tracks); tracking metrics of the tracks. Prints the
+metrics are of the detections when recorded (else of the tracks); tracking metrics and HOTA of the tracks. Prints the
 table of ``evaluate`` and lists frames without tracks; ``--png`` draws the recorded tracks beside the
 ground-truth trajectories.
 
@@ -90,7 +90,7 @@ def run(args) -> int:
         f'{len(gt_frames)} ground-truth frames'
         + (f', grid area {tuple(round(v, 3) for v in recording.area)}' if recording.area and args.area is None else '')
     )
-    print(format_metrics(result.detection, result.tracking))
+    print(format_metrics(result.detection, result.tracking, result.hota))
     if lost is not None:
         print(f'frames without a TrackArray: {lost if lost else "none"}')
     if args.png:
@@ -103,6 +103,7 @@ def run(args) -> int:
                 {
                     'detection': result.detection.as_dict(),
                     'tracking': result.tracking.as_dict() if result.tracking else None,
+                    'hota': result.hota.as_dict() if result.hota else None,
                     'detections_source': result.detections_source,
                     'frames_without_tracks': lost,
                     'image_plane': image_plane,

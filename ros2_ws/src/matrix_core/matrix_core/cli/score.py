@@ -1,19 +1,19 @@
 """``matrix-tracker score GT.txt PRED.txt``: detection and tracking metrics of BEV points (metres).
 
-GT lines: ``frame id x y``. PRED lines: ``frame id x y`` (tracks: detection AND tracking metrics) or
+GT lines: ``frame id x y``. PRED lines: ``frame id x y`` (tracks: detection, tracking and HOTA metrics) or
 ``frame x y [score]`` (detections: detection metrics only). World metres, integer frames.
 """
 
 import json
 
 from matrix_core.cli.argument_types import fraction, positive_float
-from matrix_core.metrics import BevPoints, detection_metrics, read_bev_points, tracking_metrics
+from matrix_core.metrics import BevPoints, detection_metrics, hota_metrics, read_bev_points, tracking_metrics
 from matrix_core.metrics.report import format_metrics
 
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
-        'score', help='MODA/MODP/precision/recall and MOTA/MOTP/IDF1/MT/ML of BEV text files', description=__doc__
+        'score', help='MODA/MODP/precision/recall, MOTA/MOTP/IDF1/MT/ML and HOTA of BEV text files', description=__doc__
     )
     p.add_argument('gt', help='ground truth, lines "frame id x y"')
     p.add_argument('pred', help='tracks "frame id x y" or detections "frame x y [score]"')
@@ -41,8 +41,18 @@ def run(args) -> int:
         pred = BevPoints(pred.frames[keep], pred.xy[keep], scores=pred.scores[keep])
     det = detection_metrics(gt, pred, args.threshold)
     trk = tracking_metrics(gt, pred, args.gate) if pred.has_ids else None
+    hota = hota_metrics(gt, pred, args.gate) if pred.has_ids else None
     if args.json:
-        print(json.dumps({'detection': det.as_dict(), 'tracking': trk.as_dict() if trk else None}, indent=2))
+        print(
+            json.dumps(
+                {
+                    'detection': det.as_dict(),
+                    'tracking': trk.as_dict() if trk else None,
+                    'hota': hota.as_dict() if hota else None,
+                },
+                indent=2,
+            )
+        )
     else:
-        print(format_metrics(det, trk))
+        print(format_metrics(det, trk, hota))
     return 0

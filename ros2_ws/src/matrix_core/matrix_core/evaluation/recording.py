@@ -18,8 +18,8 @@ from rosbags.highlevel import AnyReader
 from matrix_core.bags import read_bag
 from matrix_core import topics as bag_topics
 from matrix_core.bags.clock import SequenceClock, read_sequence_clock
-from matrix_core.bags.messages import stamp_ns
-from matrix_core.metrics import BevPoints, detection_metrics, read_bev_points, tracking_metrics
+from matrix_core.message_fields import stamp_ns
+from matrix_core.metrics import BevPoints, detection_metrics, hota_metrics, read_bev_points, tracking_metrics
 
 
 @dataclass
@@ -41,6 +41,7 @@ class RecordingScores:
     detections_source: str  # 'detections' or 'tracks'
     gt: BevPoints
     recording: Recording
+    hota: object = None  # HotaMetrics of the tracks, or None without tracks
 
 
 def read_recording_bag(
@@ -150,7 +151,7 @@ def _in_frames(points: BevPoints, frames) -> BevPoints:
 def score_recording(
     recording: Recording, gt: BevPoints, area=None, frames=None, threshold: float = 0.5, gate: float = 1.0
 ) -> RecordingScores:
-    """Detection metrics (of the detections when recorded, else of the tracks) and tracking metrics.
+    """Detection metrics (of the detections when recorded, else of the tracks), tracking metrics and HOTA.
 
     Args:
         area: x_min y_min x_max y_max (m) where ground truth counts (default: the recorded heatmap grid,
@@ -172,4 +173,5 @@ def score_recording(
     source = 'detections' if recording.detections is not None else 'tracks'
     det = detection_metrics(gt, recording.detections if source == 'detections' else recording.tracks, threshold)
     trk = tracking_metrics(gt, recording.tracks, gate) if recording.tracks is not None else None
-    return RecordingScores(det, trk, source, gt, recording)
+    hota = hota_metrics(gt, recording.tracks, gate) if recording.tracks is not None else None
+    return RecordingScores(det, trk, source, gt, recording, hota)

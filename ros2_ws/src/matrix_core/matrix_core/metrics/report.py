@@ -1,8 +1,9 @@
-"""One plain-text table of detection and tracking metrics (what ``score`` and ``evaluate`` print)."""
+"""One plain-text table of detection, tracking and HOTA metrics (what ``score`` and ``evaluate`` print)."""
 
 import math
 
 from matrix_core.metrics.detection import DetectionMetrics
+from matrix_core.metrics.hota import HotaMetrics
 from matrix_core.metrics.tracking import TrackingMetrics
 
 
@@ -10,7 +11,7 @@ def _pct(v: float) -> str:
     return '   n/a' if v is None or math.isnan(v) else f'{100 * v:6.2f} %'
 
 
-def format_metrics(det: DetectionMetrics = None, trk: TrackingMetrics = None) -> str:
+def format_metrics(det: DetectionMetrics = None, trk: TrackingMetrics = None, hota: HotaMetrics = None) -> str:
     """Aligned ``name  value`` lines; rates in percent, distances in metres, counts as integers."""
     rows = []
     if det is not None:
@@ -42,6 +43,14 @@ def format_metrics(det: DetectionMetrics = None, trk: TrackingMetrics = None) ->
             ('ID switches', str(trk.id_switches)),
             ('fragmentations', str(trk.fragmentations)),
             ('FP / FN (tracking)', f'{trk.fp} / {trk.fn}'),
+        ]
+    if hota is not None:
+        rows += [
+            (f'HOTA (@{hota.gate:g} m)', _pct(hota.hota)),
+            ('DetA / AssA', f'{_pct(hota.det_a).strip()} / {_pct(hota.ass_a).strip()}'),
+            ('DetRe / DetPr', f'{_pct(hota.det_re).strip()} / {_pct(hota.det_pr).strip()}'),
+            ('AssRe / AssPr', f'{_pct(hota.ass_re).strip()} / {_pct(hota.ass_pr).strip()}'),
+            ('LocA', _pct(hota.loc_a)),
         ]
     width = max(len(name) for name, _ in rows) if rows else 0
     return '\n'.join(f'{name:<{width}}  {value}' for name, value in rows)
