@@ -22,7 +22,6 @@ from diagnostic_msgs.msg import DiagnosticArray
 from matrix_msgs.msg import HomographyStamped, TrackArray
 from nav_msgs.msg import OccupancyGrid
 from rclpy.clock import Clock, ClockType
-from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from std_msgs.msg import Header
 from std_srvs.srv import Trigger
@@ -38,12 +37,12 @@ from matrix_ros import fusion_messages as out
 from matrix_ros.connect import SubscribeWhenConnected
 from matrix_ros.image_outputs import ImageOutputs
 from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
-from matrix_ros.params import declare_settings, spin_node
+from matrix_ros.params import SettingsNode, declare_settings, spin_node
 from matrix_ros.standard_outputs import StandardOutputs
 from matrix_ros.qos import publisher_qos, qos_by_name
 
 
-class FuseNode(Node):
+class FuseNode(SettingsNode):
     def __init__(self, defaults: FuseNodeSettings):
         super().__init__('fuse')
         self.settings = s = declare_settings(self, FuseNodeSettings, defaults, live=LIVE_PARAMETERS)

@@ -23,7 +23,6 @@ import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from matrix_msgs.msg import HomographyStamped, TrackArray
 from rclpy.executors import ExternalShutdownException
-from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, Image
 from std_msgs.msg import Header
 
@@ -38,11 +37,11 @@ from matrix_ros.conversions import (
     stamp_to_seconds,
 )
 from matrix_ros.executor import make_executor
-from matrix_ros.params import declare_settings, parse_node_args
+from matrix_ros.params import SettingsNode, declare_settings, parse_node_args
 from matrix_ros.qos import publisher_qos, qos_by_name
 
 
-class GraphMonitor(Node):
+class GraphMonitor(SettingsNode):
     def __init__(self, defaults: GraphMonitorSettings):
         super().__init__('graph_monitor')
         self.settings = s = declare_settings(self, GraphMonitorSettings, defaults)

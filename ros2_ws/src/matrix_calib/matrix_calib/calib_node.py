@@ -15,7 +15,6 @@ import time
 from geometry_msgs.msg import PoseStamped
 from matrix_msgs.msg import HomographyStamped
 from rclpy.clock import Clock, ClockType
-from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from std_msgs.msg import Header
 from tf2_msgs.msg import TFMessage
@@ -40,12 +39,12 @@ from matrix_ros.conversions import (
 )
 from matrix_ros.drone_link import DroneLink
 from matrix_ros.node_settings import hosted_drones
-from matrix_ros.params import declare_settings, spin_node
+from matrix_ros.params import SettingsNode, declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
 from matrix_ros.vision_messages import pose_transform, tf_msg
 
 
-class CalibNode(Node):
+class CalibNode(SettingsNode):
     def __init__(self, defaults: CalibNodeSettings, link: DroneLink = None):
         super().__init__('calib')
         # in one process with register (link), it hands over each decoded image and its registration

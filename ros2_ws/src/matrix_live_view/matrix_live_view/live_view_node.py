@@ -19,7 +19,6 @@ the static frames and the frustums go out again with every tracks message, for c
 
 from nav_msgs.msg import OccupancyGrid
 from matrix_msgs.msg import TrackArray
-from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, CompressedImage
 from tf2_msgs.msg import TFMessage
 
@@ -31,13 +30,13 @@ from matrix_live_view import foxglove_messages as fm
 from matrix_live_view.server import LiveServer
 from matrix_live_view.settings import LiveViewSettings
 from matrix_ros.conversions import stamp_to_seconds
-from matrix_ros.params import declare_settings, spin_node
+from matrix_ros.params import SettingsNode, declare_settings, spin_node
 from matrix_ros.qos import qos_by_name
 
 SCENE, TRACKS = '/live_view/scene', '/live_view/tracks'
 
 
-class LiveViewNode(Node):
+class LiveViewNode(SettingsNode):
     def __init__(self, defaults: LiveViewSettings):
         super().__init__('live_view')
         self.settings = s = declare_settings(self, LiveViewSettings, defaults)

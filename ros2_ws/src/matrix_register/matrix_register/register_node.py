@@ -17,7 +17,6 @@ once, grey, and handed to calib with its registration. A reference dataset's fir
 """
 
 from matrix_msgs.msg import HomographyStamped
-from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
 from matrix_core import topics
@@ -34,12 +33,12 @@ from matrix_ros.connect import SubscribeWhenConnected
 from matrix_ros.conversions import ConversionError, camera_info_to_camera, header_stamp_ns, registration_to_msg
 from matrix_ros.drone_link import DroneLink
 from matrix_ros.node_settings import hosted_drones
-from matrix_ros.params import declare_settings, spin_node
+from matrix_ros.params import SettingsNode, declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
 from matrix_ros.restarts import DroneRestarts
 
 
-class RegisterNode(Node):
+class RegisterNode(SettingsNode):
     def __init__(self, defaults: RegisterNodeSettings, link: DroneLink = None):
         super().__init__('register')
         self.link = link or DroneLink()  # calib of the same process, if any (matrix_bringup.drone)

@@ -26,7 +26,6 @@ from pathlib import Path
 
 import rclpy
 from rclpy.duration import Duration
-from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 
 from matrix_core.bags.clock import read_sequence_clock
@@ -36,12 +35,12 @@ from matrix_ros.conversions import seconds_to_stamp
 from matrix_ros.executor import make_executor
 from matrix_ros.lockstep import LockstepWindow
 from matrix_ros.message_types import message_class
-from matrix_ros.params import parse_node_args, declare_settings
+from matrix_ros.params import SettingsNode, parse_node_args, declare_settings
 from matrix_ros.player_settings import BagPlayerSettings
 from matrix_ros.qos import publisher_qos, qos_by_name
 
 
-class BagPlayer(Node):
+class BagPlayer(SettingsNode):
     def __init__(self, defaults: BagPlayerSettings):
         super().__init__('bag_player')
         self.settings = s = declare_settings(self, BagPlayerSettings, defaults)

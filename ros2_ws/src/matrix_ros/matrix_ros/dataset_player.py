@@ -9,7 +9,6 @@ Per view ``V`` (e.g. ``D1``) and frame, with header stamp ``start_time + frame_i
 import time
 from dataclasses import dataclass, field
 
-from rclpy.node import Node
 from std_msgs.msg import Header
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
@@ -18,7 +17,7 @@ from matrix_core.bags.clock import DEFAULT_CLOCK
 from matrix_core.datasets import DatasetError, open_dataset
 from matrix_ros.connect import SubscribersReady
 from matrix_ros.conversions import camera_to_camera_info, image_to_msg, seconds_to_stamp
-from matrix_ros.params import declare_settings, spin_node
+from matrix_ros.params import SettingsNode, declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
 
 
@@ -47,7 +46,7 @@ class DatasetPlayerSettings:
         qos_by_name(self.qos)
 
 
-class DatasetPlayer(Node):
+class DatasetPlayer(SettingsNode):
     def __init__(self, defaults: DatasetPlayerSettings):
         super().__init__('dataset_player')
         self.settings = s = declare_settings(self, DatasetPlayerSettings, defaults)

@@ -17,7 +17,6 @@ import time
 from dataclasses import dataclass, field
 
 from diagnostic_msgs.msg import DiagnosticArray
-from rclpy.node import Node
 from sensor_msgs.msg import CompressedImage
 from std_msgs.msg import Header
 
@@ -25,7 +24,7 @@ from matrix_core import topics
 from matrix_core.link_gate import DROPPED, LinkGate
 from matrix_ros import diagnostics
 from matrix_ros.node_settings import hosted_drones
-from matrix_ros.params import declare_settings, spin_node
+from matrix_ros.params import SettingsNode, declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
 
 
@@ -63,7 +62,7 @@ class LinkSenderSettings:
             )
 
 
-class LinkSender(Node):
+class LinkSender(SettingsNode):
     def __init__(self, cli_settings: LinkSenderSettings = None):
         super().__init__('link_sender')
         self.settings = s = declare_settings(self, LinkSenderSettings, cli_settings)

@@ -2,6 +2,7 @@
 :mod:`matrix_core.settings`), and the standard ``main`` of a node that takes both."""
 
 import argparse
+import array
 import dataclasses
 import os
 import signal
@@ -13,12 +14,16 @@ import typing
 import rclpy
 import rclpy.executors
 from rcl_interfaces.msg import ParameterDescriptor, ParameterType, SetParametersResult
+from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
+from rclpy.time_source import USE_SIM_TIME_NAME
+from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
 from rclpy.utilities import remove_ros_args
 
 from matrix_core.settings import add_settings_arguments, settings_fields, settings_from_namespace
 from matrix_ros.executor import make_executor
+from matrix_ros.site_parameter import check_site_views, site_defaults
 
 
 OWN_THREAD_DRAIN_S = 10.0  # at exit, longest a node's own thread goes on with the calls handed to it
@@ -43,52 +48,106 @@ def _type_key(typ):
     return typ
 
 
-def declare_settings(node, cls, defaults=None, live=(), shared=()):
+class SettingsNode(Node):
+    """A node whose parameters are a settings dataclass (:func:`declare_settings`).
+
+    rclpy has no public getter of the parameters given to a node (``-p``, ``--params-file``; rclcpp has
+    ``NodeOptions::parameter_overrides()``), so this node has rclpy declare each of them on creation
+    (``automatically_declare_parameters_from_overrides``) and keeps what was given in ``given_parameters``
+    (name -> value), read through the public parameter API: ``declare_settings`` then types each one by its
+    field and names any the node does not have, instead of rclpy ignoring it silently."""
+
+    def __init__(self, node_name: str, **kwargs):
+        try:
+            super().__init__(node_name, automatically_declare_parameters_from_overrides=True, **kwargs)
+        except ValueError as exc:  # rclpy's only ValueError here: a value it cannot type
+            raise ValueError(
+                f'{node_name}: {exc} (a parameter given as an empty list [] has no type in rclpy: leave it out, '
+                'unset is the empty default)'
+            ) from exc
+        self.given_parameters = {
+            name: self.get_parameter(name).value
+            for name in self.list_parameters([], 0).names  # depth 0 with no prefix: every declared name
+            if name not in RCLPY_PARAMETERS
+        }
+
+
+# Declared by rclpy's Node itself, given or not: known to every node.
+RCLPY_PARAMETERS = (USE_SIM_TIME_NAME, START_TYPE_DESCRIPTION_SERVICE_PARAM)
+
+
+def declare_settings(node: SettingsNode, cls, defaults=None, live=(), shared=()):
     """Declare one parameter per field of ``cls`` on ``node`` and return the filled dataclass.
 
     ``defaults`` (an instance of ``cls``, e.g. from CLI flags) replaces the dataclass defaults; values
-    given with ``--ros-args -p name:=value`` or a YAML file win over both. The dataclass validates.
+    given with ``--ros-args -p name:=value`` or a YAML file win over both (converted to the field's type where
+    that loses nothing: ``3`` for a float is 3.0). The dataclass validates.
     ``live`` names the parameters that may change while the node runs (``ros2 param set``): a new value
     replaces ``node.settings`` by a validated copy (the node reads them from there each time); every other
     parameter is read-only, so that setting it fails with a reason instead of silently doing nothing.
     ``shared``: the parameter names of the other nodes in this process (one parameter set is given to the
-    whole process, ``matrix_ros.drone_link``): not unknown here.
+    whole process, ``matrix_ros.drone_link``): not unknown here, and not parameters of this node.
     """
+    if not isinstance(node, SettingsNode):
+        raise TypeError(f'{node.get_name()}: declare_settings needs a matrix_ros.params.SettingsNode')
+    fields = settings_fields(cls)
+    names = [name for name, *_ in fields]
+    given = node.given_parameters
+    check_no_unknown_parameters(node, given, names, shared)
+    for name in given:  # declared untyped by rclpy: declared again below, typed, or dropped (another node's)
+        if not name.startswith('qos_overrides.'):
+            node.undeclare_parameter(name)
+    defaults, site = site_defaults(cls, defaults, given)  # the site first: the fields that follow it default to it
     values = {}
-    for name, typ, default, help_text in settings_fields(cls):
+    for name, typ, default, help_text in fields:
         if defaults is not None:
             default = getattr(defaults, name)
+        value = _given_value(node, name, typ, given[name]) if name in given else default
         param_type = _PARAM_TYPES[_type_key(typ)]
         descriptor = ParameterDescriptor(description=help_text, type=param_type, read_only=name not in live)
-        if isinstance(default, (list, tuple)) and not default:
+        if isinstance(value, (list, tuple)) and not value:
             # rclpy cannot infer an array type from an empty list: declare the type, unset means empty.
-            param = node.declare_parameter(name, Parameter.Type(param_type), descriptor)
-            values[name] = list(param.value) if param.value is not None else []
+            node.declare_parameter(name, Parameter.Type(param_type), descriptor, ignore_override=True)
+            values[name] = []
         else:
-            param = node.declare_parameter(name, list(default) if isinstance(default, tuple) else default, descriptor)
-            values[name] = list(param.value) if isinstance(default, (list, tuple)) else param.value
-    check_no_unknown_parameters(node, [name for name, *_ in settings_fields(cls)], shared)
+            value = list(value) if isinstance(value, (list, tuple)) else value
+            values[name] = node.declare_parameter(name, value, descriptor, ignore_override=True).value
     if live:
         node.add_on_set_parameters_callback(lambda params: _set_live(node, params, live))
-    return cls(**values)
+    settings = cls(**values)
+    check_site_views(node, site, settings)
+    return settings
 
 
-def check_no_unknown_parameters(node, names, shared=()) -> None:
-    """ValueError naming every parameter given to ``node`` (``-p``, ``--params-file``) that it does not have,
-    the closest of its own, and all of them: rclpy ignores such a value silently, so a typo
-    (``sync_timout:=3.0``) would leave the default in place without a word. ``qos_overrides.*`` are
-    declared later, by the publishers, and are left to rclpy."""
+def _given_value(node, name: str, typ, value):
+    """A given parameter's value as the field's type ``typ``: as given, or an integer as a float (YAML and
+    ``-p`` read ``3`` as an integer); anything else is a ValueError naming the node, the parameter and both."""
+    item = typing.get_args(typ)[0] if typing.get_origin(typ) in (list, tuple) else None
+    if item is None:
+        values, want = [value], typ
+    elif isinstance(value, (list, tuple, array.array)):
+        values, want = list(value), item
+    else:
+        values, want = None, item
+    if values is not None:
+        if want is float and all(type(v) is int for v in values):
+            values = [float(v) for v in values]
+        if all(type(v) is want for v in values):
+            return values[0] if item is None else values
+    kind = f'a list of {item.__name__}' if item is not None else f'a {typ.__name__}'
+    raise ValueError(f'{node.get_name()}: parameter {name!r} is {kind}, got {value!r}')
+
+
+def check_no_unknown_parameters(node, given, names, shared=()) -> None:
+    """ValueError naming every parameter in ``given`` (``-p``, ``--params-file``) that ``node`` does not have
+    (``names``, the process's ``shared``), the closest of its own, and all of them: rclpy ignores such a value
+    silently, so a typo (``sync_timout:=3.0``) would leave the default in place without a word.
+    ``qos_overrides.*`` are declared later, by the publishers, and are left to rclpy."""
     import difflib
 
-    declared = set(node.list_parameters([], 0).names)  # depth 0 with no prefix: every declared name
-    # What was given (-p, --params-file) has no public getter in rclpy: Node.__init__ keeps it in
-    # Node._parameter_overrides (rclcpp has NodeOptions::parameter_overrides()). The public route,
-    # automatically_declare_parameters_from_overrides=True, would declare every given name untyped before
-    # declare_settings can type it, in every node class; until rclpy has a getter this one private read stays.
-    given = getattr(node, '_parameter_overrides', {})
-    unknown = sorted(n for n in given if n not in declared and n not in shared and not n.startswith('qos_overrides.'))
+    known = sorted({*names, *RCLPY_PARAMETERS, *shared})
+    unknown = sorted(n for n in given if n not in known and not n.startswith('qos_overrides.'))
     if unknown:
-        known = sorted(set(names) | declared | set(shared))  # shared: what the process takes
         hints = [
             f'{n!r} (did you mean {m[0]!r}?)' if (m := difflib.get_close_matches(n, known, 1)) else repr(n)
             for n in unknown

@@ -22,7 +22,6 @@ from pathlib import Path
 
 from ament_index_python.packages import get_package_share_directory, PackageNotFoundError
 from rclpy.clock import Clock, ClockType
-from rclpy.node import Node
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
@@ -31,7 +30,7 @@ from matrix_core.bags.clock import SequenceClock, read_sequence_clock
 from matrix_core.message_fields import stamp_seconds
 from matrix_core.metrics.bev_points import BevPoints, bev_point_lines
 from matrix_ros.message_types import message_class
-from matrix_ros.params import declare_settings, spin_node
+from matrix_ros.params import SettingsNode, declare_settings, spin_node
 from matrix_ros.qos import qos_by_name
 
 
@@ -98,7 +97,7 @@ def _typestore():
     return store
 
 
-class Recorder(Node):
+class Recorder(SettingsNode):
     def __init__(self, defaults: RecorderSettings):
         super().__init__('recorder')
         self.settings = s = declare_settings(self, RecorderSettings, defaults)

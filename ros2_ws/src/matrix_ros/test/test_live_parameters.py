@@ -5,10 +5,9 @@ from dataclasses import dataclass, field
 
 import pytest
 import rclpy
-from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from matrix_ros.params import declare_settings
+from matrix_ros.params import SettingsNode, declare_settings
 
 
 @dataclass
@@ -24,7 +23,7 @@ class _Settings:
 @pytest.fixture
 def node():
     rclpy.init()
-    node = Node('live_parameters_test')
+    node = SettingsNode('live_parameters_test')
     node.settings = declare_settings(node, _Settings, live=('gap_s',))
     yield node
     node.destroy_node()
@@ -49,13 +48,53 @@ def test_an_unknown_parameter_is_an_error_naming_it_and_the_valid_ones():
     """A mistyped ``-p``: rclpy would ignore it silently; declare_settings names it, the closest
     parameter and all of the node's."""
     rclpy.init(args=['test', '--ros-args', '-p', 'gap_z:=1.0', '-p', 'use_sim_time:=true'])
-    node = Node('unknown_parameter_test')
+    node = SettingsNode('unknown_parameter_test')
     try:
         with pytest.raises(
             ValueError,
             match=r"unknown parameter\(s\) 'gap_z' \(did you mean 'gap_s'\?\); its "
             r"parameters are: .*gap_s.*use_sim_time, views",
         ):
+            declare_settings(node, _Settings)
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+def test_given_values_are_typed_by_the_fields():
+    """``-p gap_s:=3`` is read as an integer by rclpy: the float field takes 3.0; a parameter of another node
+    of the process (``shared``) is accepted and is not a parameter of this one."""
+    rclpy.init(args=['test', '--ros-args', '-p', 'gap_s:=3', '-p', 'views:=[D2, D4]', '-p', 'other:=1'])
+    node = SettingsNode('typed_parameter_test')
+    try:
+        settings = declare_settings(node, _Settings, shared=('other',))
+        assert settings.gap_s == 3.0 and type(settings.gap_s) is float and settings.views == ['D2', 'D4']
+        assert node.get_parameter('gap_s').type_ == Parameter.Type.DOUBLE
+        assert not node.has_parameter('other')
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+def test_a_value_of_the_wrong_type_is_an_error_naming_it():
+    rclpy.init(args=['test', '--ros-args', '-p', 'views:=D2'])
+    node = SettingsNode('wrong_type_test')
+    try:
+        with pytest.raises(ValueError, match=r"wrong_type_test: parameter 'views' is a list of str, got 'D2'"):
+            declare_settings(node, _Settings)
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+def test_a_plain_node_cannot_declare_settings():
+    """A plain rclpy node keeps what was given to it private: declare_settings could not check it."""
+    from rclpy.node import Node
+
+    rclpy.init()
+    node = Node('plain_node_test')
+    try:
+        with pytest.raises(TypeError, match='SettingsNode'):
             declare_settings(node, _Settings)
     finally:
         node.destroy_node()
