@@ -34,7 +34,8 @@ from tqdm import tqdm
 
 from matrix_core.geometry.homography import pixel_scale_homography
 from matrix_core.datasets import open_dataset
-from matrix_ros.conversions import image_to_compressed, image_to_msg, seconds_to_stamp, stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
+from matrix_ros.conversions import image_to_compressed, image_to_msg, seconds_to_stamp
 from matrix_ros.qos import publisher_qos, qos_by_name
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -73,7 +74,7 @@ class Feeder:
             self.frames.append((imgs, homs))
 
     def _on_tracks(self, msg):
-        self.received[round(stamp_to_seconds(msg.header.stamp), 6)] = time.time()
+        self.received[round(stamp_seconds(msg.header.stamp), 6)] = time.time()
 
     def _on_diag(self, msg):
         for st in msg.status:

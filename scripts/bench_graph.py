@@ -51,7 +51,7 @@ from sensor_msgs.msg import CompressedImage, Image
 from matrix_bringup.graph import BagFacts, GraphSettings, graph_nodes
 from matrix_bringup.run_graph import Graph
 from matrix_core.bags.clock import read_sequence_clock
-from matrix_ros.conversions import stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
 from matrix_ros.qos import qos_by_name
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -110,13 +110,13 @@ class Probe:
         self.node.create_subscription(
             kind,
             topic,
-            lambda m: self.first_image.setdefault(stamp_to_seconds(m.header.stamp), time.monotonic()),
+            lambda m: self.first_image.setdefault(stamp_seconds(m.header.stamp), time.monotonic()),
             qos_by_name('reliable', 2),
         )
         self.node.create_subscription(
             TrackArray,
             '/tracks',
-            lambda m: self.tracks.setdefault(stamp_to_seconds(m.header.stamp), time.monotonic()),
+            lambda m: self.tracks.setdefault(stamp_seconds(m.header.stamp), time.monotonic()),
             qos_by_name('history', 100),
         )
         self.node.create_subscription(
@@ -126,12 +126,12 @@ class Probe:
     def _on_diagnostics(self, msg):
         for st in msg.status:
             if st.name.startswith(('calib/', 'register/')):
-                stamp = stamp_to_seconds(msg.header.stamp)
+                stamp = stamp_seconds(msg.header.stamp)
                 self.drone_done[stamp] = self.drone_done.get(stamp, 0) + 1
                 arrivals = self.calibrated if st.name.startswith('calib/') else self.registered
                 arrivals.setdefault(stamp, []).append(time.monotonic())
             elif st.name == 'fuse':
-                self.views_used[stamp_to_seconds(msg.header.stamp)] = int(
+                self.views_used[stamp_seconds(msg.header.stamp)] = int(
                     next(kv.value for kv in st.values if kv.key == 'views_used')
                 )
 

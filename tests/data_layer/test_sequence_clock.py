@@ -13,7 +13,7 @@ import yaml
 from matrix_core.bags import SequenceBagWriter, SequenceClock, read_bag, read_sequence_clock
 from matrix_core import topics as t
 from matrix_core.bags.clock import DEFAULT_CLOCK, stored_sequence_clock
-from matrix_core.bags.messages import stamp_ns
+from matrix_core.message_fields import stamp_ns
 from matrix_core.cli.main import main as cli
 from matrix_core.evaluation.recording import ground_truth_from_bag
 from matrix_core.geometry.camera import Camera, pose_matrix

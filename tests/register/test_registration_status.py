@@ -7,7 +7,8 @@ from matrix_msgs.msg import HomographyStamped
 
 from matrix_core.register.file_frame import registration_from_record, registration_to_record
 from matrix_core.register.registration import Registration, RegistrationStatus
-from matrix_ros.conversions import registration_from_msg, registration_to_msg
+from matrix_core.message_fields import registration_from_msg
+from matrix_ros.conversions import registration_to_msg
 
 
 def test_the_message_constants_are_the_core_values():

@@ -18,7 +18,8 @@ from std_msgs.msg import Header
 
 from matrix_core.cli.main import main as cli
 from matrix_core.datasets import open_dataset
-from matrix_ros.conversions import image_to_compressed, image_to_msg, seconds_to_stamp, stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
+from matrix_ros.conversions import image_to_compressed, image_to_msg, seconds_to_stamp
 from matrix_ros.qos import publisher_qos, qos_by_name
 from ros_helpers import spin_for, spin_until, start_node, stop
 
@@ -52,12 +53,12 @@ class Drones:
         ]
 
     def _on_tracks(self, msg):
-        self.tracks[round(stamp_to_seconds(msg.header.stamp), 3)] = msg
+        self.tracks[round(stamp_seconds(msg.header.stamp), 3)] = msg
 
     def _on_diag(self, msg):
         by_name = {s.name: s for s in msg.status}
         if 'fuse' in by_name:
-            self.diags[round(stamp_to_seconds(msg.header.stamp), 3)] = by_name
+            self.diags[round(stamp_seconds(msg.header.stamp), 3)] = by_name
 
     def spin_until(self, condition, timeout):
         return spin_until(self.node, condition, timeout_s=timeout, executor=self.executor)

@@ -36,7 +36,8 @@ from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
 from matrix_ros import fusion_messages as out
 from matrix_ros.connect import SubscribeWhenConnected
 from matrix_ros.image_outputs import ImageOutputs
-from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
+from matrix_ros.conversions import seconds_to_stamp
 from matrix_ros.params import SettingsNode, declare_settings, spin_node
 from matrix_ros.standard_outputs import StandardOutputs
 from matrix_ros.qos import publisher_qos, qos_by_name
@@ -117,7 +118,7 @@ class FuseNode(SettingsNode):
         self.fuser.reset()
 
     def _add(self, view: str, part: str, msg) -> None:
-        stamp, now = stamp_to_seconds(msg.header.stamp), time.monotonic()
+        stamp, now = stamp_seconds(msg.header.stamp), time.monotonic()
         if self.fuser.restart.is_back(stamp):  # compared with the frames fused: a lagging drone is only late
             self.get_logger().warning(
                 f't={stamp:.3f} s is {self.fuser.restart.newest - stamp:.1f} s before the last fused frame: '
@@ -172,17 +173,17 @@ class FuseNode(SettingsNode):
             self.get_logger().warning(missing)
         if result.resets:
             self.get_logger().info(f't={frame.stamp:.3f} s: reset {" and ".join(result.resets)} state')
-        self.pubs['diagnostics'].publish(
-            out.fuse_diagnostics(
-                header,
-                frame,
-                result,
-                time.monotonic() - frame.first_arrival,
-                latency,
-                self.sync.late_items,
-                self.frames_published,
-            )
+        diagnostics = out.fuse_diagnostics(
+            header,
+            frame,
+            result,
+            time.monotonic() - frame.first_arrival,
+            latency,
+            self.sync.late_items,
+            self.frames_published,
         )
+        diagnostics.status.extend(self.image_outputs.statuses)  # views whose reference cannot be read
+        self.pubs['diagnostics'].publish(diagnostics)
         self.inputs.decode_deferred()  # published: now the images of the next frames, and the next frame's share
         self.fuser.prepare_next()  # of this one (its latency is spared both)
 

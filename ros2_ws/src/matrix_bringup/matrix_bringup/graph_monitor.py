@@ -29,12 +29,12 @@ from std_msgs.msg import Header
 from matrix_bringup.monitor_settings import GraphMonitorSettings
 from matrix_core import topics
 from matrix_core.evaluation.graph_report import write_graph_report
-from matrix_ros.conversions import (
+from matrix_core.message_fields import (
     ConversionError,
-    camera_info_to_camera,
-    msg_to_image,
+    camera_from_camera_info,
+    image_from_msg,
     registration_from_msg,
-    stamp_to_seconds,
+    stamp_seconds,
 )
 from matrix_ros.executor import make_executor
 from matrix_ros.params import SettingsNode, declare_settings, parse_node_args
@@ -90,14 +90,14 @@ class GraphMonitor(SettingsNode):
 
     def _key(self, view, msg):
         self.last_arrival = time.monotonic()
-        stamp = round(stamp_to_seconds(msg.header.stamp), 6)
+        stamp = round(stamp_seconds(msg.header.stamp), 6)
         self.first_seen.setdefault(stamp, self.last_arrival)
         return view, stamp
 
     def _processed(self, stage: str, view: str, header) -> None:
         """Note that ``stage`` processed ``view``'s frame at ``header.stamp``; announce the frame once done."""
         self.last_arrival = time.monotonic()
-        stamp = round(stamp_to_seconds(header.stamp), 6)
+        stamp = round(stamp_seconds(header.stamp), 6)
         self.first_seen.setdefault(stamp, self.last_arrival)
         seen = self.processed.setdefault(stamp, set())
         seen.add((stage, view))
@@ -116,7 +116,7 @@ class GraphMonitor(SettingsNode):
 
     def _camera(self, store, view, msg):
         try:
-            store[self._key(view, msg)] = camera_info_to_camera(msg)
+            store[self._key(view, msg)] = camera_from_camera_info(msg)
         except ConversionError as exc:
             self.get_logger().error(f'{view}: unusable CameraInfo: {exc}')
 
@@ -125,7 +125,7 @@ class GraphMonitor(SettingsNode):
 
     def _image(self, view, msg):
         try:
-            self.images[self._key(view, msg)] = msg_to_image(msg)
+            self.images[self._key(view, msg)] = image_from_msg(msg)
         except ConversionError as exc:
             self.get_logger().error(f'{view}: unusable image: {exc}')
 

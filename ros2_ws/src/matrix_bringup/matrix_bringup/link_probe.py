@@ -21,7 +21,7 @@ from matrix_msgs.msg import TrackArray
 from sensor_msgs.msg import CompressedImage
 
 from matrix_core import topics
-from matrix_ros.conversions import stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
 from matrix_ros.qos import qos_by_name
 
 
@@ -30,7 +30,7 @@ def _emit(**line) -> None:
 
 
 def _stamp(msg) -> float:
-    return round(stamp_to_seconds(msg.header.stamp), 6)
+    return round(stamp_seconds(msg.header.stamp), 6)
 
 
 def _values(status) -> dict:

@@ -32,13 +32,8 @@ from matrix_core.register.registrar import Registrar
 from matrix_core.register.scene import settings_for_dataset
 from matrix_core.register.settings import MATRIX_BLOCK
 from matrix_register.settings import RegisterNodeSettings
-from matrix_ros.conversions import (
-    camera_info_to_camera,
-    image_to_compressed,
-    registration_from_msg,
-    seconds_to_stamp,
-    stamp_to_seconds,
-)
+from matrix_core.message_fields import camera_from_camera_info, registration_from_msg, stamp_seconds
+from matrix_ros.conversions import image_to_compressed, seconds_to_stamp
 from matrix_ros.qos import qos_by_name
 from ros_helpers import spin_until, start_node, stop, wait_matched
 
@@ -91,16 +86,16 @@ def test_drone_process_decodes_once_and_hands_the_registration_to_calib(matrix_s
         node.create_subscription(
             HomographyStamped,
             f'/{VIEW}/homography',
-            lambda m: homographies.setdefault(stamp_to_seconds(m.header.stamp), m),
+            lambda m: homographies.setdefault(stamp_seconds(m.header.stamp), m),
             10,
         ),
         node.create_subscription(
-            CameraInfo, f'/{VIEW}/camera_info', lambda m: infos.setdefault(stamp_to_seconds(m.header.stamp), m), 10
+            CameraInfo, f'/{VIEW}/camera_info', lambda m: infos.setdefault(stamp_seconds(m.header.stamp), m), 10
         ),
         node.create_subscription(
             DiagnosticArray,
             '/diagnostics',
-            lambda m: diags.update({(s.name, round(stamp_to_seconds(m.header.stamp), 3)): s for s in m.status}),
+            lambda m: diags.update({(s.name, round(stamp_seconds(m.header.stamp), 3)): s for s in m.status}),
             50,
         ),
     ]
@@ -148,7 +143,7 @@ def test_drone_process_decodes_once_and_hands_the_registration_to_calib(matrix_s
         ground = apply_homography(live.ground_H_img, pixels)
         assert np.median(np.linalg.norm(ground - apply_homography(registration.ground_H_img, pixels), axis=1)) < 0.05
         assert np.median(np.linalg.norm(ground - world, axis=1)) < 0.1  # metres
-        cam = camera_info_to_camera(infos[stamp])
+        cam = camera_from_camera_info(infos[stamp])
         # grey and colour decodes of one JPEG differ by a grey level here and there: poses by up to ~0.1 deg on
         # D3 (measured), each as close to the truth as the other
         assert rotation_angle_deg(cam.R, camera.R) < 0.15 and np.linalg.norm(cam.center - camera.center) < 0.08

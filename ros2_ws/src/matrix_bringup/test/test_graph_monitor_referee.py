@@ -11,7 +11,8 @@ from rclpy.node import Node
 from std_msgs.msg import Header
 
 from matrix_core import topics
-from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
+from matrix_ros.conversions import seconds_to_stamp
 from matrix_ros.qos import publisher_qos, qos_by_name
 from ros_helpers import spin_for, spin_until, start_node, stop, wait_matched
 
@@ -44,7 +45,7 @@ def test_a_frame_is_done_only_when_every_part_arrived_and_a_late_one_is_named(no
     diagnostics = node.create_publisher(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, publisher_qos())
     tracks = node.create_publisher(TrackArray, topics.TRACKS, publisher_qos())
     frame_done = node.create_subscription(
-        Header, topics.FRAME_DONE_TOPIC, lambda m: done.append(stamp_to_seconds(m.stamp)), qos_by_name('history')
+        Header, topics.FRAME_DONE_TOPIC, lambda m: done.append(stamp_seconds(m.stamp)), qos_by_name('history')
     )
     try:
         wait_matched(node, [diagnostics, tracks, frame_done], [monitor], 60)

@@ -29,14 +29,8 @@ from matrix_core.geometry.camera import check_intrinsics
 from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
 from matrix_ros import diagnostics
 from matrix_ros.connect import SubscribeWhenConnected
-from matrix_ros.conversions import (
-    ConversionError,
-    camera_to_camera_info,
-    camera_to_pose,
-    msg_to_image,
-    registration_from_msg,
-    stamp_to_seconds,
-)
+from matrix_core.message_fields import ConversionError, image_from_msg, registration_from_msg, stamp_seconds
+from matrix_ros.conversions import camera_to_camera_info, camera_to_pose
 from matrix_ros.drone_link import DroneLink
 from matrix_ros.node_settings import hosted_drones
 from matrix_ros.params import SettingsNode, declare_settings, spin_node
@@ -128,12 +122,12 @@ class CalibNode(SettingsNode):
         item = (msg, received or time.perf_counter(), image)  # image: decoded by register in this process, else None
         if view not in self.syncs:
             return self._calibrate(view, *item)
-        stamp = stamp_to_seconds(msg.header.stamp)
+        stamp = stamp_seconds(msg.header.stamp)
         self._restart_sync(view, stamp)
         self._synced(view, self.syncs[view].add('image', stamp, item, time.monotonic()))
 
     def _on_registration(self, view: str, msg: HomographyStamped):
-        sync, stamp = self.syncs.get(view), stamp_to_seconds(msg.header.stamp)
+        sync, stamp = self.syncs.get(view), stamp_seconds(msg.header.stamp)
         if sync is None:  # not guided by registrations (use_registration false)
             return
         self._restart_sync(view, stamp)
@@ -175,10 +169,10 @@ class CalibNode(SettingsNode):
     def _calibrate(self, view: str, msg, received: float, image=None, registration=None):
         stamp = msg.header.stamp
         try:
-            image = msg_to_image(msg) if image is None else image
-            result = self.calibrators[view].process(image, stamp_to_seconds(stamp), registration)
+            image = image_from_msg(msg) if image is None else image
+            result = self.calibrators[view].process(image, stamp_seconds(stamp), registration)
         except (ConversionError, ValueError) as exc:
-            self.get_logger().error(f'{view}: image at {stamp_to_seconds(stamp):.3f} s skipped: {exc}')
+            self.get_logger().error(f'{view}: image at {stamp_seconds(stamp):.3f} s skipped: {exc}')
             self._diagnose(view, stamp, diagnostics.ERROR, f'bad_input: {exc}', {'status': 'bad_input'})
             return
         if result.camera is not None and (result.status == OK or self.settings.publish_stale):

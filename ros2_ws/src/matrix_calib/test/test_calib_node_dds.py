@@ -12,7 +12,8 @@ from sensor_msgs.msg import CameraInfo, CompressedImage
 
 from matrix_core.datasets import MatrixDataset
 from matrix_core.geometry.camera import rotation_angle_deg
-from matrix_ros.conversions import camera_info_to_camera, pose_to_world_T_cam, stamp_to_seconds
+from matrix_core.message_fields import camera_from_camera_info, stamp_seconds
+from matrix_ros.conversions import pose_to_world_T_cam
 from matrix_ros.qos import qos_by_name
 from ros_helpers import spin_until, start_node, stop, stop_all, wait_matched
 
@@ -70,18 +71,18 @@ def test_calib_node_matches_stored_calibration(matrix_sample, node_executable):
         out = '\n'.join(stop_all(processes))  # the player first
         node.destroy_node()
         rclpy.shutdown()
-    status_of = {(st.hardware_id, stamp_to_seconds(d.header.stamp)): st for d in diags for st in d.status}
+    status_of = {(st.hardware_id, stamp_seconds(d.header.stamp)): st for d in diags for st in d.status}
     for v in VIEWS:
         infos, poses = got[(v, 'info')], got[(v, 'pose')]
         assert len(infos) >= FRAMES and len(poses) >= FRAMES, f'{v}: missing output; processes said:\n{out}'
         ok = 0
         for info, pose in zip(infos, poses):
             assert info.header.stamp == pose.header.stamp
-            stamp = stamp_to_seconds(info.header.stamp)
+            stamp = stamp_seconds(info.header.stamp)
             index = int(round((stamp - 1.0) / 0.5))  # the player stamps frame i with 1.0 s + 0.5 s * i
             status = status_of.get((v, stamp))
             assert status is not None, f'{v}: no diagnostics for the image stamped {stamp}'
-            cam = camera_info_to_camera(info)
+            cam = camera_from_camera_info(info)
             assert np.all(np.isfinite(info.p))
             np.testing.assert_allclose(pose_to_world_T_cam(pose), cam.world_T_cam, atol=1e-6)
             truth = dataset.camera(v, dataset.frames[index])

@@ -14,7 +14,8 @@ from sensor_msgs.msg import CompressedImage
 from std_msgs.msg import Header
 
 from matrix_core.datasets import MatrixDataset
-from matrix_ros.conversions import image_to_compressed, seconds_to_stamp, stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
+from matrix_ros.conversions import image_to_compressed, seconds_to_stamp
 from matrix_ros.qos import qos_by_name
 from ros_helpers import spin_for, spin_until, start_node, stop, wait_matched
 
@@ -47,9 +48,7 @@ def test_calib_follows_the_registration_and_copes_without_it(matrix_sample, node
     diag_sub = node.create_subscription(
         DiagnosticArray,
         '/diagnostics',
-        lambda m: diags.update(
-            {round(stamp_to_seconds(m.header.stamp), 3): s for s in m.status if s.name == 'calib/D5'}
-        ),
+        lambda m: diags.update({round(stamp_seconds(m.header.stamp), 3): s for s in m.status if s.name == 'calib/D5'}),
         50,
     )
     calib = start_node(

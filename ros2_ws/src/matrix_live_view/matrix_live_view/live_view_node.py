@@ -29,7 +29,7 @@ from matrix_core.live_scene import Trails
 from matrix_live_view import foxglove_messages as fm
 from matrix_live_view.server import LiveServer
 from matrix_live_view.settings import LiveViewSettings
-from matrix_ros.conversions import stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
 from matrix_ros.params import SettingsNode, declare_settings, spin_node
 from matrix_ros.qos import qos_by_name
 
@@ -102,7 +102,7 @@ class LiveViewNode(SettingsNode):
             self.get_logger().error(f'{topic}: message not shown: {exc}', throttle_duration_sec=5.0)
 
     def _on_tracks(self, msg: TrackArray) -> None:
-        stamp, s = stamp_to_seconds(msg.header.stamp), self.settings
+        stamp = stamp_seconds(msg.header.stamp)
         if self.last_stamp is not None and stamp < self.last_stamp:  # a replay restarted: old trails are wrong
             self.trails.reset()
         self.last_stamp = stamp

@@ -30,7 +30,8 @@ from matrix_core.register.warm_up import warm_up_once
 from matrix_register.settings import RegisterNodeSettings
 from matrix_ros import diagnostics
 from matrix_ros.connect import SubscribeWhenConnected
-from matrix_ros.conversions import ConversionError, camera_info_to_camera, header_stamp_ns, registration_to_msg
+from matrix_core.message_fields import ConversionError, camera_from_camera_info, stamp_ns
+from matrix_ros.conversions import registration_to_msg
 from matrix_ros.drone_link import DroneLink
 from matrix_ros.node_settings import hosted_drones
 from matrix_ros.params import SettingsNode, declare_settings, spin_node
@@ -87,7 +88,7 @@ class RegisterNode(SettingsNode):
             CameraInfo,
             topics.drone_topic(prefix, s.camera_info_topic),
             self.restarts.checked(
-                view, lambda m: self._run(view, self.pairing[view].camera_info(header_stamp_ns(m.header), m))
+                view, lambda m: self._run(view, self.pairing[view].camera_info(stamp_ns(m.header), m))
             ),
             10,
         )
@@ -112,7 +113,7 @@ class RegisterNode(SettingsNode):
         if view in self.registrars:
             self._register(view, msg, image)
         else:
-            self._run(view, self.pairing[view].image(header_stamp_ns(msg.header), (msg, image)))
+            self._run(view, self.pairing[view].image(stamp_ns(msg.header), (msg, image)))
 
     def _run(self, view: str, steps: list) -> None:
         """Carry out the reference pairing's steps."""
@@ -138,7 +139,7 @@ class RegisterNode(SettingsNode):
             self.registrars[view] = Registrar(
                 self.settings,
                 image,
-                camera_info_to_camera(step.camera_info),
+                camera_from_camera_info(step.camera_info),
                 self.area,
                 f'{view}/frame/{text}',
                 self.backend,
@@ -156,7 +157,7 @@ class RegisterNode(SettingsNode):
 
     def _register(self, view: str, msg, image) -> None:
         try:
-            result = self.registrars[view].register(image, stamp_text(header_stamp_ns(msg.header)))
+            result = self.registrars[view].register(image, stamp_text(stamp_ns(msg.header)))
         except ValueError as exc:
             return self._publish(view, msg.header, Registration.bad_input(str(exc), backend=self.backend.name))
         self._publish(view, msg.header, result, measured=True)
@@ -169,7 +170,7 @@ class RegisterNode(SettingsNode):
         bad_input = result.status == RegistrationStatus.BAD_INPUT
         if not result.ok:
             log = self.get_logger().error if bad_input else self.get_logger().warning
-            log(f'{view}: image at {stamp_text(header_stamp_ns(header))} not registered: {result.message}')
+            log(f'{view}: image at {stamp_text(stamp_ns(header))} not registered: {result.message}')
         level = diagnostics.OK if result.ok else (diagnostics.ERROR if bad_input else diagnostics.WARN)
         text = f'{result.status}' if result.ok else f'{result.status}: {result.message}'
         values = (

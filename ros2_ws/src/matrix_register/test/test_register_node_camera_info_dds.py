@@ -17,7 +17,8 @@ from std_msgs.msg import Header
 from matrix_core.datasets import MatrixDataset
 from matrix_core.register.evaluate import homography_error_px
 from matrix_core.register.settings import MATRIX_BLOCK
-from matrix_ros.conversions import camera_to_camera_info, image_to_msg, seconds_to_stamp, stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
+from matrix_ros.conversions import camera_to_camera_info, image_to_msg, seconds_to_stamp
 from ros_helpers import spin_for, spin_until, start_node, stop, wait_matched
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -36,7 +37,7 @@ def test_reference_from_camera_info_over_dds(matrix_sample, node_executable):
     node = Node('register_camera_info_test')
     try:
         homographies = node.create_subscription(
-            HomographyStamped, f'/{VIEW}/homography', lambda m: got.__setitem__(stamp_to_seconds(m.header.stamp), m), 10
+            HomographyStamped, f'/{VIEW}/homography', lambda m: got.__setitem__(stamp_seconds(m.header.stamp), m), 10
         )
         image_pub = node.create_publisher(Image, f'/{VIEW}/image_raw', 10)
         info_pub = node.create_publisher(CameraInfo, f'/{VIEW}/camera_info', 10)

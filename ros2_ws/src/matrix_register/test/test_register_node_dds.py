@@ -23,7 +23,8 @@ from matrix_core.geometry.homography import apply_homography
 from matrix_core.register.evaluate import homography_error_px
 from matrix_core.register.ground_mask import visible_ground_grid
 from matrix_core.register.settings import MATRIX_BLOCK
-from matrix_ros.conversions import image_to_msg, seconds_to_stamp, stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
+from matrix_ros.conversions import image_to_msg, seconds_to_stamp
 from ros_helpers import spin_until, start_node, stop, wait_matched
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -93,7 +94,7 @@ def test_register_node_over_dds(matrix_sample, node_executable):
     assert alive, f'register node died on a corrupt image; {log}'
     assert bad_reported(), f'no diagnostics error for the corrupt image; {log}'
     assert 'too short' in register_out, log
-    assert restarted and stamp_to_seconds(restarted[0].header.stamp) == 1.0, log
+    assert restarted and stamp_seconds(restarted[0].header.stamp) == 1.0, log
     assert restarted[0].status == HomographyStamped.OK and restarted[0].reference_id == f'{VIEWS[0]}/reference', log
     assert f'{VIEWS[0]}: t=1.000 s: time went back, starting this drone afresh' in register_out, log
     failed = [m for m in got[VIEWS[0]] if m.header.stamp.sec == 99]  # downstream learns of it too
@@ -105,7 +106,7 @@ def test_register_node_over_dds(matrix_sample, node_executable):
         assert len(msgs) >= FRAMES, f'{view}: {len(msgs)} homographies; {log}'
         ref = dataset.reference_camera(view)
         for msg in msgs[:FRAMES]:
-            index = round((stamp_to_seconds(msg.header.stamp) - 1.0) / 0.5)
+            index = round((stamp_seconds(msg.header.stamp) - 1.0) / 0.5)
             frame = dataset.frames[index]
             cur = dataset.camera(view, frame)
             assert msg.status == HomographyStamped.OK, f'{view} frame {frame}: {msg.status} {msg.reason}'

@@ -1,7 +1,9 @@
-"""rclpy messages <-> core types. The field conventions and every check live in
-:mod:`matrix_core.message_fields` (shared with the rosbags side, ``matrix_core.bags.messages``); this module
-only builds and reads rclpy's message classes. Every conversion that can fail raises
-:class:`ConversionError` with a one-line reason.
+"""core types -> rclpy messages. The field conventions and every check live in
+:mod:`matrix_core.message_fields` (shared with the rosbags side, ``matrix_core.bags.messages``), which also
+reads messages back (``image_from_msg``, ``camera_from_camera_info``, ``registration_from_msg``,
+``stamp_seconds``, ...: they take any message with the fields); this module only builds rclpy's message
+classes. Every conversion that can fail raises :class:`matrix_core.message_fields.ConversionError` with a
+one-line reason.
 """
 
 import numpy as np
@@ -13,16 +15,6 @@ from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from matrix_core import message_fields as fields
 from matrix_core.geometry.camera import Camera
 from matrix_core.register.registration import Registration
-
-ConversionError = fields.ConversionError
-is_jpeg = fields.is_jpeg
-stamp_to_seconds = fields.stamp_seconds
-header_stamp_ns = fields.stamp_ns  # Header -> integer nanoseconds
-msg_to_image = fields.image_from_msg  # sensor_msgs/Image -> (H, W, 3) BGR uint8
-compressed_to_image = fields.image_from_msg  # CompressedImage (jpeg/png, optional JPEG reduction) -> BGR
-gray_image_from_msg = fields.gray_image_from_msg  # Image or CompressedImage -> (H, W) grey, full size
-camera_info_to_camera = fields.camera_from_camera_info
-registration_from_msg = fields.registration_from_msg
 
 
 def seconds_to_stamp(seconds: float) -> Time:

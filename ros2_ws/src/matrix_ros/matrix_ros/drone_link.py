@@ -26,7 +26,7 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
-from matrix_ros.conversions import gray_image_from_msg, msg_to_image, stamp_to_seconds
+from matrix_core.message_fields import gray_image_from_msg, image_from_msg, stamp_seconds
 
 MAX_WAITING_IMAGES = 8  # per drone, 4 s at 2 Hz: a passing backlog; about 25 MB of 1080p images and messages
 
@@ -83,7 +83,7 @@ class DroneLink:
                 self._queue.remove(images[0])
                 self._node.get_logger().warning(
                     f'{images[0][1]}: calib is {MAX_WAITING_IMAGES} images behind: the image of '
-                    f't={stamp_to_seconds(images[0][2].header.stamp):.3f} s is not calibrated',
+                    f't={stamp_seconds(images[0][2].header.stamp):.3f} s is not calibrated',
                     throttle_duration_sec=5.0,
                 )
         self._wake.trigger()
@@ -98,7 +98,7 @@ class DroneLink:
 
     def decode(self, msg):
         """register's image: (H, W) grey full size when shared, else (H, W, 3) BGR (as a node alone decodes)."""
-        return gray_image_from_msg(msg) if self.shared else msg_to_image(msg)
+        return gray_image_from_msg(msg) if self.shared else image_from_msg(msg)
 
     def image(self, view: str, msg, image) -> None:
         """register received ``msg`` of ``view``, decoded as ``image`` (None: undecodable; calib decodes it

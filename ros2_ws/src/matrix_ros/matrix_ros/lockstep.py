@@ -9,7 +9,7 @@ in order, and waits for all of it: the results do not depend on the machine's sp
 
 from typing import Callable
 
-from matrix_ros.conversions import stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
 
 
 class LockstepWindow:
@@ -31,7 +31,7 @@ class LockstepWindow:
     def on_message(self, msg) -> None:
         """A message on the lockstep topic: a std_msgs/Header or any stamped message."""
         header = msg if hasattr(msg, 'frame_id') else msg.header
-        stamp = self.key(stamp_to_seconds(header.stamp))
+        stamp = self.key(stamp_seconds(header.stamp))
         self.released[stamp] = self.released.get(stamp, 0) + 1
 
     @staticmethod

@@ -1,7 +1,7 @@
 """A per-drone node's answer to a replay that started over (``matrix_core.sync.stamp_restart``)."""
 
 from matrix_core.sync import StampRestart
-from matrix_ros.conversions import stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
 
 
 class DroneRestarts:
@@ -12,7 +12,7 @@ class DroneRestarts:
         self.node, self.gap_s, self.start, self.streams = node, gap_s, start, {}
 
     def check(self, view: str, header) -> None:
-        stamp = stamp_to_seconds(header.stamp)
+        stamp = stamp_seconds(header.stamp)
         if self.streams.setdefault(view, StampRestart(self.gap_s)).went_back(stamp):
             self.node.get_logger().warning(f'{view}: t={stamp:.3f} s: time went back, starting this drone afresh')
             self.start(view)

@@ -13,7 +13,7 @@ from sensor_msgs.msg import CameraInfo, CompressedImage
 
 from matrix_core.bags import SequenceClock, write_sequence_bag
 from matrix_core.datasets import MatrixDataset
-from matrix_ros.conversions import camera_info_to_camera, compressed_to_image, stamp_to_seconds
+from matrix_core.message_fields import camera_from_camera_info, image_from_msg, stamp_seconds
 from matrix_ros.qos import publisher_qos
 from ros_helpers import finish, start_node
 
@@ -57,11 +57,11 @@ def test_replay_is_unchanged_and_publishes_clock(matrix_sample, sample_bag, node
     assert player.returncode == 0, out
     assert len(got['img']) == 5 and len(got['info']) == 5, out
     for i, (img, info) in enumerate(zip(got['img'], got['info'])):
-        assert stamp_to_seconds(info.header.stamp) == pytest.approx(1.0 + 0.5 * i)
-        np.testing.assert_allclose(camera_info_to_camera(info).cam_T_world, ds.camera('D3', i).cam_T_world, atol=1e-9)
-        decoded = compressed_to_image(img).astype(float)
+        assert stamp_seconds(info.header.stamp) == pytest.approx(1.0 + 0.5 * i)
+        np.testing.assert_allclose(camera_from_camera_info(info).cam_T_world, ds.camera('D3', i).cam_T_world, atol=1e-9)
+        decoded = image_from_msg(img).astype(float)
         assert np.abs(decoded - ds.load_image('D3', i)).mean() < 3.0  # JPEG of a JPEG
-    assert [stamp_to_seconds(c.clock) for c in got['clock']][:5] == pytest.approx([1.0, 1.5, 2.0, 2.5, 3.0])
+    assert [stamp_seconds(c.clock) for c in got['clock']][:5] == pytest.approx([1.0, 1.5, 2.0, 2.5, 3.0])
     assert 'sequence clock: first stamp 1 s, 0.5 s per frame' in out and 'stores no sequence clock' not in out
     assert 'played 5 frames up to frame 4 ' in out, out
 
@@ -84,7 +84,7 @@ def test_player_reads_the_clock_stored_in_the_bag(matrix_sample, node_executable
     node.destroy_node()
     rclpy.shutdown()
     assert player.returncode == 0, out
-    assert [stamp_to_seconds(i.header.stamp) for i in infos] == pytest.approx([clock.stamp(i) for i in range(5)])
+    assert [stamp_seconds(i.header.stamp) for i in infos] == pytest.approx([clock.stamp(i) for i in range(5)])
     assert 'sequence clock: first stamp 3 s, 0.25 s per frame' in out and 'played 5 frames up to frame 4 ' in out, out
 
 
@@ -212,6 +212,6 @@ def test_a_bag_cut_short_plays_its_frames_before_the_cut_and_says_so(sample_bag,
     node.destroy_node()
     rclpy.shutdown()
     assert player.returncode == 4, out
-    assert [round(stamp_to_seconds(i.header.stamp) * 1e9) for i in infos] == whole, out
+    assert [round(stamp_seconds(i.header.stamp) * 1e9) for i in infos] == whole, out
     assert 'messages before the damage' in out and 'stopping after the last whole frame before the damage' in out
     assert f'played {len(whole)} frames' in out, out

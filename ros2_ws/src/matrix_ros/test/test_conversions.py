@@ -5,18 +5,14 @@ import pytest
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
 from matrix_core.datasets import MatrixDataset
+from matrix_core.message_fields import ConversionError, camera_from_camera_info, image_from_msg, stamp_seconds
 from matrix_ros.conversions import (
-    ConversionError,
-    camera_info_to_camera,
     camera_to_camera_info,
     camera_to_pose,
-    compressed_to_image,
     image_to_compressed,
     image_to_msg,
-    msg_to_image,
     pose_to_world_T_cam,
     seconds_to_stamp,
-    stamp_to_seconds,
 )
 
 
@@ -28,7 +24,7 @@ def ds(matrix_sample):
 def test_image_roundtrip_and_encodings(ds):
     img = ds.load_image('D2', 1)
     msg = image_to_msg(img)
-    np.testing.assert_array_equal(msg_to_image(msg), img)
+    np.testing.assert_array_equal(image_from_msg(msg), img)
     rgb = Image(
         height=msg.height,
         width=msg.width,
@@ -36,10 +32,10 @@ def test_image_roundtrip_and_encodings(ds):
         step=msg.step,
         data=np.ascontiguousarray(img[:, :, ::-1]).tobytes(),
     )
-    np.testing.assert_array_equal(msg_to_image(rgb), img)
+    np.testing.assert_array_equal(image_from_msg(rgb), img)
     grey = image_to_msg(img[:, :, 1])
     assert grey.encoding == 'mono8'
-    np.testing.assert_array_equal(msg_to_image(grey)[:, :, 0], img[:, :, 1])
+    np.testing.assert_array_equal(image_from_msg(grey)[:, :, 0], img[:, :, 1])
 
 
 @pytest.mark.parametrize(
@@ -52,17 +48,17 @@ def test_image_roundtrip_and_encodings(ds):
 )
 def test_bad_images_raise_clear_errors(bad, reason):
     with pytest.raises(ConversionError, match=reason):
-        msg_to_image(bad)
+        image_from_msg(bad)
 
 
 def test_compressed(ds):
     img = ds.load_image('D1', 0)
-    dec = compressed_to_image(image_to_compressed(img, quality=98))
+    dec = image_from_msg(image_to_compressed(img, quality=98))
     assert dec.shape == img.shape and np.abs(dec.astype(int) - img).mean() < 3
     with pytest.raises(ConversionError, match='corrupt'):
-        compressed_to_image(CompressedImage(format='jpeg', data=b'\xff\xd8garbage'))
+        image_from_msg(CompressedImage(format='jpeg', data=b'\xff\xd8garbage'))
     with pytest.raises(ConversionError, match='empty'):
-        compressed_to_image(CompressedImage(format='jpeg'))
+        image_from_msg(CompressedImage(format='jpeg'))
 
 
 def test_camera_info_roundtrip_and_projection(ds):
@@ -73,7 +69,7 @@ def test_camera_info_roundtrip_and_projection(ds):
     X = np.r_[person.world_xy, 0.0, 1.0]
     uv = (P @ X)[:2] / (P @ X)[2]
     np.testing.assert_allclose(uv, cam.ground_to_img(person.world_xy)[0], atol=1e-6)
-    back = camera_info_to_camera(msg)
+    back = camera_from_camera_info(msg)
     np.testing.assert_allclose(back.cam_T_world, cam.cam_T_world, atol=1e-9)
     assert (back.width, back.height) == (1920, 1080)
 
@@ -82,10 +78,10 @@ def test_camera_info_rejects_nan_and_non_rotation(ds):
     msg = camera_to_camera_info(ds.camera('D1', 0))
     nan = CameraInfo(k=msg.k, p=[float('nan')] * 12, width=1920, height=1080)
     with pytest.raises(ConversionError, match='NaN'):
-        camera_info_to_camera(nan)
+        camera_from_camera_info(nan)
     scaled = CameraInfo(k=msg.k, p=[2.0 * v for v in msg.p], width=1920, height=1080)
     with pytest.raises(ConversionError, match='proper rotation'):
-        camera_info_to_camera(scaled)
+        camera_from_camera_info(scaled)
 
 
 def test_pose_is_camera_in_world(ds):
@@ -97,4 +93,4 @@ def test_pose_is_camera_in_world(ds):
 
 def test_stamps_are_exact():
     for t in (0.0, 1.5, 12345.000000001):
-        assert stamp_to_seconds(seconds_to_stamp(t)) == pytest.approx(t, abs=1e-9)
+        assert stamp_seconds(seconds_to_stamp(t)) == pytest.approx(t, abs=1e-9)

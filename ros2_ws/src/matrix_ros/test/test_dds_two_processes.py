@@ -11,7 +11,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, Image
 
 from matrix_core.datasets import MatrixDataset
-from matrix_ros.conversions import camera_info_to_camera, msg_to_image, stamp_to_seconds
+from matrix_core.message_fields import camera_from_camera_info, image_from_msg, stamp_seconds
 from ros_helpers import spin_until, start_node, stop
 
 pytestmark = pytest.mark.ros
@@ -51,11 +51,11 @@ def test_image_and_camera_info_cross_process(matrix_sample, node_executable):
     for index, (img_msg, info_msg) in enumerate(zip(got['/D3/image_raw'], got['/D3/ground_truth/camera_info'])):
         frame = dataset.frames[index]
         assert img_msg.header.stamp == info_msg.header.stamp
-        assert stamp_to_seconds(img_msg.header.stamp) == pytest.approx(1.0 + 0.5 * index)
+        assert stamp_seconds(img_msg.header.stamp) == pytest.approx(1.0 + 0.5 * index)
         assert (img_msg.width, img_msg.height, img_msg.encoding) == (1920, 1080, 'bgr8')
-        np.testing.assert_array_equal(msg_to_image(img_msg), dataset.load_image('D3', frame))
+        np.testing.assert_array_equal(image_from_msg(img_msg), dataset.load_image('D3', frame))
         sent = dataset.camera('D3', frame)
-        cam = camera_info_to_camera(info_msg)
+        cam = camera_from_camera_info(info_msg)
         np.testing.assert_allclose(cam.K, sent.K, atol=1e-9)
         np.testing.assert_allclose(cam.cam_T_world, sent.cam_T_world, atol=1e-9)
         np.testing.assert_allclose(cam.dist, sent.dist, atol=1e-15)

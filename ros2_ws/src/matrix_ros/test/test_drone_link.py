@@ -12,7 +12,8 @@ import rclpy
 from sensor_msgs.msg import CompressedImage
 from std_msgs.msg import Header
 
-from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
+from matrix_ros.conversions import seconds_to_stamp
 from matrix_ros.drone_link import MAX_WAITING_IMAGES, DroneLink
 from matrix_ros.params import _spin_in_thread
 
@@ -30,9 +31,9 @@ def _registration(t: float) -> Header:  # the link reads only the header: any st
 def _linked(calls: list) -> DroneLink:
     return DroneLink().connect(
         lambda view, msg, image, received: calls.append(
-            ('image', stamp_to_seconds(msg.header.stamp), received, threading.get_ident())
+            ('image', stamp_seconds(msg.header.stamp), received, threading.get_ident())
         ),
-        lambda view, msg: calls.append(('registration', stamp_to_seconds(msg.stamp), None, threading.get_ident())),
+        lambda view, msg: calls.append(('registration', stamp_seconds(msg.stamp), None, threading.get_ident())),
     )
 
 

@@ -20,7 +20,8 @@ from std_msgs.msg import Header
 
 from matrix_bringup.distributed import read_probe
 from matrix_core.link_gate import WIRE_OVERHEAD
-from matrix_ros.conversions import seconds_to_stamp, stamp_to_seconds
+from matrix_core.message_fields import stamp_seconds
+from matrix_ros.conversions import seconds_to_stamp
 from matrix_ros.qos import publisher_qos, qos_by_name
 from ros_helpers import finish, spin_for, spin_until, start_node, stop, wait_matched
 
@@ -127,4 +128,4 @@ def test_frames_cross_as_fast_as_the_link_budget_lets_them(node_executable, tmp_
 
 
 def _rounded(stamp) -> float:
-    return round(stamp_to_seconds(stamp), 3)
+    return round(stamp_seconds(stamp), 3)

@@ -12,7 +12,6 @@ from matrix_core.geometry.camera import Camera, pose_matrix
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 _T = TYPESTORE.types
-stamp_ns = fields.stamp_ns  # Header -> integer nanoseconds
 
 
 def header(stamp_ns: int, frame_id: str):
@@ -37,10 +36,6 @@ def compressed_msg(image: np.ndarray, hdr, quality: int = 95):
     return _T['sensor_msgs/msg/CompressedImage'](
         header=hdr, format=f['format'], data=np.frombuffer(f['data'], np.uint8)
     )
-
-
-msg_to_image = fields.image_from_msg  # Image (bgr8, rgb8, mono8, ...) or CompressedImage -> BGR
-camera_info_to_camera = fields.camera_from_camera_info
 
 
 def camera_info_msg(camera: Camera, hdr):

@@ -6,7 +6,8 @@ from pathlib import Path
 import numpy as np
 from rosbags.rosbag2 import Reader
 
-from matrix_core.bags import messages as m
+from matrix_core import message_fields as fields
+from matrix_core.bags.messages import TYPESTORE
 from matrix_core.bags.salvage import raw_messages
 from matrix_core import topics as t
 
@@ -32,7 +33,7 @@ def read_bag(path, topics=None):
     damaged or unfinished bag yields the messages before the damage, then raises
     :class:`~matrix_core.bags.salvage.BagDamaged` (see there)."""
     for topic, msgtype, time_ns, raw in raw_messages(path, None if topics is None else set(topics)):
-        yield BagMessage(topic, msgtype, time_ns, m.TYPESTORE.deserialize_cdr(raw, msgtype))
+        yield BagMessage(topic, msgtype, time_ns, TYPESTORE.deserialize_cdr(raw, msgtype))
 
 
 @dataclass
@@ -62,7 +63,7 @@ def read_sequence_frames(path):
         return frame
 
     for bm in read_bag(path):
-        stamp = m.stamp_ns(bm.msg.header) if hasattr(bm.msg, 'header') else bm.time_ns
+        stamp = fields.stamp_ns(bm.msg.header) if hasattr(bm.msg, 'header') else bm.time_ns
         if current is not None and stamp != current.stamp_ns:
             yield finish(current)
             current, poses, ids = None, None, None
@@ -70,9 +71,9 @@ def read_sequence_frames(path):
             current = SequenceFrame(stamp)
         view = bm.topic.split('/')[1]
         if bm.msgtype in (t.IMAGE_TYPE, t.COMPRESSED_TYPE):
-            current.images[view] = m.msg_to_image(bm.msg)
+            current.images[view] = fields.image_from_msg(bm.msg)
         elif bm.msgtype == t.CAMERA_INFO_TYPE:
-            current.cameras[view] = m.camera_info_to_camera(bm.msg)
+            current.cameras[view] = fields.camera_from_camera_info(bm.msg)
         elif bm.topic == t.PEDESTRIANS_TOPIC:
             poses = [np.array([p.position.x, p.position.y, p.position.z]) for p in bm.msg.poses]
         elif bm.topic == t.PEDESTRIAN_IDS_TOPIC:

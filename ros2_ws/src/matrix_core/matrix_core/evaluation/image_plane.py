@@ -13,7 +13,7 @@ import numpy as np
 from rosbags.highlevel import AnyReader
 
 from matrix_core import topics
-from matrix_core.bags.messages import stamp_ns
+from matrix_core.message_fields import stamp_ns
 
 from matrix_core.fusion.image_boxes import (
     ImageBoxSettings,
