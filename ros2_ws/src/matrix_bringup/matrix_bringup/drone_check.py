@@ -5,7 +5,9 @@ the other drones, fuse and the recorder run without it, and the replay's end nam
 from dataclasses import replace
 
 from matrix_core.datasets import DatasetError, MatrixDataset
-from matrix_core.datasets.drone_inputs import unreadable_drones
+from matrix_core.datasets.drone_inputs import left_out_text, unreadable_drones
+
+__all__ = ['LEFT_OUT_EXIT', 'left_out_text', 'without_unreadable_drones']
 
 LEFT_OUT_EXIT = 5  # run_graph's exit code when every frame played but some drone was left out at start
 
@@ -26,8 +28,3 @@ def without_unreadable_drones(settings) -> tuple:
     if not kept:
         raise ValueError(f'no drone can start: {left_out_text(left_out)}')
     return replace(settings, views=kept), left_out
-
-
-def left_out_text(left_out: dict) -> str:
-    """One line naming each drone left out and why."""
-    return '; '.join(f'{view} left out ({why})' for view, why in sorted(left_out.items()))

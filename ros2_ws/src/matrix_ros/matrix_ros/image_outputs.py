@@ -12,13 +12,16 @@ from vision_msgs.msg import Detection2DArray as VisionDetection2DArray
 from matrix_core import topics
 from matrix_core.fusion.image_outputs import ViewCameras
 from matrix_core.message_fields import ConversionError, image_from_msg
+from matrix_ros import diagnostics
 from matrix_ros import fusion_messages as out
 from matrix_ros import vision_messages as vm
+from matrix_ros.left_out import start_up_statuses
 from matrix_ros.qos import publisher_qos
 
 
 class ImageOutputs:
-    """Publishers of every view's image outputs (none when ``detections_2d_topic`` is empty)."""
+    """Publishers of every view's image outputs (none when ``detections_2d_topic`` is empty); ``statuses``: a
+    ``fuse/<view>/start_up`` DiagnosticStatus (WARN, the reason) per view whose reference cannot be read."""
 
     def __init__(self, node, settings):
         s, self.node = settings, node
@@ -38,8 +41,14 @@ class ImageOutputs:
             if s.overlay
             else {}
         )
-        if self.boxes and s.input_kind == 'homography' and not self.cameras.intrinsics:
+        if self.boxes and s.input_kind == 'homography' and not self.cameras.intrinsics and not self.cameras.unavailable:
             node.get_logger().warning('no detections_2d from homographies: scene_dataset (the intrinsics) is not set')
+        # A view whose reference cannot be read is still fused; only its boxes from homographies need the
+        # reference's intrinsics. Said once here, and in every frame's diagnostics (``statuses``).
+        consequence = 'no image boxes' if self.boxes and s.input_kind == 'homography' else 'reference unusable'
+        for view, why in sorted(self.cameras.unavailable.items()):
+            node.get_logger().warning(f'{view}: {consequence}: {why} (its images are fused all the same)')
+        self.statuses = start_up_statuses(node.get_name(), self.cameras.unavailable, diagnostics.WARN, consequence)
 
     def publish(self, stamp, frame, tracks) -> None:
         """Boxes of ``tracks`` in every view that has a camera this frame (a synchronised ``frame``)."""

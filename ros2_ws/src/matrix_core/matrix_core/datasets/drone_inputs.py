@@ -21,3 +21,8 @@ def unreadable_drones(dataset, views) -> dict:
         except (DatasetError, OSError, ValueError) as exc:
             problems[view] = f'reference: {exc}'
     return problems
+
+
+def left_out_text(left_out: dict) -> str:
+    """One line naming each drone left out (view -> why, as :func:`unreadable_drones` gives) and why."""
+    return '; '.join(f'{view} left out ({why})' for view, why in sorted(left_out.items()))
