@@ -246,9 +246,9 @@ def main(argv=None) -> int:
     parser.add_argument(
         '--player_lead',
         type=float,
-        default=10.0,
-        help='s from all hosts ready to the first frame (longer on a loaded machine: a player '
-        'not up by then skips the frames due before)',
+        default=5.0,
+        help='s from every player ready (matrix_bringup.start_signal) to the first frame: the delivery of the '
+        'start time to the players',
     )
     parser.add_argument('--out', type=Path, default=ROOT / 'out' / 'bench_distributed')
     parser.add_argument('--layout', action='store_true', help='print what runs where and what crosses each link')

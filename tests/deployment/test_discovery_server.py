@@ -5,6 +5,7 @@ link by DDS stream (matrix_bringup.link_capture): a real talker on D1, listeners
 import json
 import os
 import sys
+import time
 
 import pytest
 
@@ -18,18 +19,33 @@ pytestmark = [
     pytest.mark.skipif(bool(REASON), reason=f'no network namespaces here: {REASON}'),
 ]
 
+MESSAGES = 60
+DEADLINE_S = 180.0  # a safety net only: the talker starts on its readers' match, the readers stop on its messages
+# The talker publishes once both listeners matched (found through the server), so none of its messages goes
+# before a reader is there; each listener stops once it got them all (the histories hold all: none is lost).
 TALK = (
-    'import sys, time, rclpy\nfrom std_msgs.msg import String\nrclpy.init()\nn = rclpy.create_node("talker")\n'
-    'p = n.create_publisher(String, "/D1/chat", 10)\nfor i in range(int(sys.argv[1])):\n'
-    '    p.publish(String(data="x" * 2000))\n    time.sleep(0.2)\n'
+    'import sys, time, rclpy\nfrom rclpy.duration import Duration\nfrom std_msgs.msg import String\nrclpy.init()\n'
+    'n = rclpy.create_node("talker")\np = n.create_publisher(String, "/D1/chat", 100)\n'
+    'end = time.monotonic() + float(sys.argv[2])\n'
+    'while p.get_subscription_count() < 2 and time.monotonic() < end:\n    time.sleep(0.1)\n'
+    'for i in range(int(sys.argv[1])):\n    p.publish(String(data="x" * 2000))\n    time.sleep(0.2)\n'
+    'p.wait_for_all_acked(Duration(seconds=30.0))\n'
 )
 LISTEN = (
     'import sys, time, json, rclpy\nfrom std_msgs.msg import String\nrclpy.init()\n'
     'n = rclpy.create_node("listener")\ngot = []\n'
-    'n.create_subscription(String, "/D1/chat", lambda m: got.append(len(m.data)), 10)\n'
-    'end = time.time() + float(sys.argv[1])\nwhile time.time() < end:\n    rclpy.spin_once(n, timeout_sec=0.1)\n'
+    'n.create_subscription(String, "/D1/chat", lambda m: got.append(len(m.data)), 100)\n'
+    'end = time.monotonic() + float(sys.argv[2])\n'
+    'while len(got) < int(sys.argv[1]) and time.monotonic() < end:\n    rclpy.spin_once(n, timeout_sec=0.1)\n'
     'print(json.dumps({"got": len(got)}), flush=True)\n'
 )
+
+
+def _wait_for(condition, what: str):
+    deadline = time.monotonic() + DEADLINE_S
+    while not condition():
+        assert time.monotonic() < deadline, f'after {DEADLINE_S} s still waiting for {what}'
+        time.sleep(0.1)
 
 
 def test_server_from_environment_and_streams_captured(tmp_path):
@@ -44,18 +60,22 @@ def test_server_from_environment_and_streams_captured(tmp_path):
             env,
         )
         hosts.start(GROUND, [sys.executable, '-m', 'matrix_bringup.discovery_server'], tmp_path / 'server.log', env)
+        # the capture sees the link from before the first DDS packet
+        _wait_for(lambda: read_probe(tmp_path / 'capture.log') or capture.poll() is not None, 'the capture')
+        assert capture.poll() is None, (tmp_path / 'capture.log').read_text()
+        args = [str(MESSAGES), str(DEADLINE_S)]
         listeners = {
-            h: hosts.start(h, [sys.executable, '-c', LISTEN, '20'], tmp_path / f'listen_{h}.log', env)
+            h: hosts.start(h, [sys.executable, '-c', LISTEN, *args], tmp_path / f'listen_{h}.log', env)
             for h in (GROUND, 'D2')
         }
-        talker = hosts.start('D1', [sys.executable, '-c', TALK, '60'], tmp_path / 'talk.log', env)
-        assert talker.wait(60) == 0, (tmp_path / 'talk.log').read_text()
+        talker = hosts.start('D1', [sys.executable, '-c', TALK, *args], tmp_path / 'talk.log', env)
+        assert talker.wait(2 * DEADLINE_S) == 0, (tmp_path / 'talk.log').read_text()
         for h, p in listeners.items():
-            assert p.wait(60) == 0, (tmp_path / f'listen_{h}.log').read_text()
+            assert p.wait(2 * DEADLINE_S) == 0, (tmp_path / f'listen_{h}.log').read_text()
         ports = {h: hosts.udp_ports(h) for h in hosts.hosts}
         hosts.stop(capture)
     got = {h: json.loads((tmp_path / f'listen_{h}.log').read_text().splitlines()[-1])['got'] for h in listeners}
-    assert all(n >= 30 for n in got.values()), got  # both found the talker through the server
+    assert all(n == MESSAGES for n in got.values()), got  # both found the talker through the server
     domain = int(os.environ.get('ROS_DOMAIN_ID', '0'))
     assert SERVER_PORT in ports[GROUND] and not any(7400 + 250 * domain in p for p in ports.values()), ports
 

@@ -2,6 +2,7 @@
 link passes nothing until restored, limits are applied, and nothing is left behind (namespaces, links,
 processes): on leaving normally, on an exception, and after the owning process was SIGKILLed."""
 
+import signal
 import subprocess
 import sys
 import time
@@ -14,24 +15,40 @@ from matrix_bringup.netns_harness import GROUND, Hosts, namespaces, remove_stale
 REASON = unavailable()
 pytestmark = [pytest.mark.slow, pytest.mark.skipif(bool(REASON), reason=f'no network namespaces here: {REASON}')]
 
+# Binds, says so, then waits for SIGUSR1 (sent once the sender is done) and reads what its socket holds, waiting
+# a moment more for a datagram still crossing (blocked first: a signal before the wait is kept, not fatal).
 RECEIVE = (
-    'import socket, sys; s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM); s.bind(("", 47001)); '
-    's.settimeout(float(sys.argv[1])); print(s.recv(100).decode(), flush=True)'
+    'import signal, socket, sys; signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGUSR1}); '
+    's = socket.socket(socket.AF_INET, socket.SOCK_DGRAM); s.bind(("", 47001)); print("ready", flush=True); '
+    'signal.sigwait({signal.SIGUSR1}); s.settimeout(float(sys.argv[1]))\n'
+    'try:\n    print(s.recv(100).decode(), flush=True)\nexcept TimeoutError:\n    print("nothing", flush=True)'
 )
 SEND = (
     'import socket, sys, time\nfor _ in range(20):\n    socket.socket(socket.AF_INET, socket.SOCK_DGRAM)'
     '.sendto(b"hello", (sys.argv[1], 47001)); time.sleep(0.05)'
 )
+DEADLINE_S = 120.0  # a safety net only: every wait below ends on an event (a line, an exit, a process state)
+
+
+def _wait_for(condition, what: str):
+    deadline = time.monotonic() + DEADLINE_S
+    while not condition():
+        assert time.monotonic() < deadline, f'after {DEADLINE_S} s still waiting for {what}'
+        time.sleep(0.05)
 
 
 def _reaches(hosts: Hosts, src: str, dst: str, tmp_path: Path) -> bool:
-    """A UDP datagram from host ``src`` arrives at host ``dst`` (within 1.5 s)."""
+    """A UDP datagram from host ``src`` arrives at host ``dst``: the receiver is bound before the sender starts
+    and reads once the sender has sent all its datagrams."""
     log = tmp_path / f'recv_{src}_{dst}_{time.monotonic_ns()}.log'
-    receiver = hosts.start(dst, [sys.executable, '-c', RECEIVE, '1.5'], log)
-    time.sleep(0.3)  # the receiver binds its port (what is tested is the link, not this start)
-    hosts.start(src, [sys.executable, '-c', SEND, hosts.address(dst)], tmp_path / 'send.log').wait(10)
-    receiver.wait(10)
-    return 'hello' in log.read_text()
+    receiver = hosts.start(dst, [sys.executable, '-c', RECEIVE, '1.0'], log)
+    _wait_for(lambda: 'ready' in log.read_text().splitlines()[1:] or receiver.poll() is not None, 'the receiver')
+    assert receiver.poll() is None, log.read_text()
+    sender = hosts.start(src, [sys.executable, '-c', SEND, hosts.address(dst)], tmp_path / 'send.log')
+    assert sender.wait(DEADLINE_S) == 0, (tmp_path / 'send.log').read_text()
+    receiver.send_signal(signal.SIGUSR1)
+    assert receiver.wait(DEADLINE_S) == 0, log.read_text()
+    return 'hello' in log.read_text().splitlines()[1:]
 
 
 def _alive(pids) -> list:
@@ -49,16 +66,16 @@ def _alive(pids) -> list:
 def _in_namespaces(hosts: Hosts, at_least: int = 0) -> list:
     """pids of every process in the hosts' namespaces (``ip netns pids``), once there are ``at_least`` (a
     process just started may not have entered its namespace yet: ``ip netns exec`` joins it, then execs)."""
-    deadline = time.monotonic() + 10
-    while True:
-        pids = [
+
+    def pids():
+        return [
             int(p)
             for h in hosts.hosts
             for p in subprocess.run(['ip', 'netns', 'pids', hosts.ns(h)], capture_output=True, text=True).stdout.split()
         ]
-        if len(pids) >= at_least or time.monotonic() > deadline:
-            return pids
-        time.sleep(0.05)
+
+    _wait_for(lambda: len(pids()) >= at_least, f'{at_least} processes in the namespaces')
+    return pids()
 
 
 def test_links_cut_restore_limit_and_nothing_left(tmp_path):
@@ -110,7 +127,7 @@ def test_teardown_on_failure_on_sigterm_and_after_the_owner_was_killed(tmp_path)
     owner = subprocess.Popen([sys.executable, '-c', OWNER, str(tmp_path / 'c.log')], stdout=subprocess.PIPE, text=True)
     tag, sleeper = owner.stdout.readline().split()
     owner.terminate()
-    assert owner.wait(30) == 128 + 15 and _alive([int(sleeper)]) == []
+    assert owner.wait(DEADLINE_S) == 128 + 15 and _alive([int(sleeper)]) == []
     assert namespaces(owner_pid=owner.pid) == []
 
     # An owner killed with SIGKILL cannot clean up: its processes get SIGTERM (they die with it) and the
@@ -120,9 +137,6 @@ def test_teardown_on_failure_on_sigterm_and_after_the_owner_was_killed(tmp_path)
     assert sorted(namespaces(owner_pid=owner.pid)) == sorted([f'{tag}-ground', f'{tag}-D1'])
     owner.kill()
     owner.wait()
-    deadline = time.monotonic() + 10
-    while _alive([int(sleeper)]) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    assert _alive([int(sleeper)]) == []  # the sleeper died with its owner (PR_SET_PDEATHSIG)
+    _wait_for(lambda: _alive([int(sleeper)]) == [], 'the sleeper to die with its owner (PR_SET_PDEATHSIG)')
     assert sorted(remove_stale()) == sorted([f'{tag}-ground', f'{tag}-D1'])
     assert namespaces(owner_pid=owner.pid) == []

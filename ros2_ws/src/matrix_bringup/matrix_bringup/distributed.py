@@ -21,6 +21,7 @@ from matrix_bringup.deployment import GROUND, Deployment
 from matrix_bringup.graph import share_file
 from matrix_bringup.netns_harness import Hosts, address
 from matrix_bringup.run_graph import command
+from matrix_core import topics
 
 SERVER_PORT = 11811  # of the discovery server (config/fastdds_server.xml, fastdds_client.xml)
 # name -> (profile under share/matrix_bringup/config, ROS_AUTOMATIC_DISCOVERY_RANGE, other variables)
@@ -62,16 +63,18 @@ def start(
     discovery: str = 'multicast',
     image_probes=(),
     captures=(),
-    player_lead_s: float = 10.0,
+    player_lead_s: float = 5.0,
     timeout_s: float = 300.0,
 ) -> dict:
     """Start the discovery server on the ground if ``discovery`` needs one ('ground/discovery_server'), a
     ``link_probe`` of fuse's output on the ground (label 'ground/probe'), one of the images on each
     drone of ``image_probes`` ('Dn/probe'; its player then waits for that reader too), a ``link_capture`` of
     the link of each drone of ``captures`` ('Dn/capture', before any DDS traffic), then the deployment's
-    processes in their hosts, the ground first. The players come last, once fuse has every drone's geometry
-    stream connected (``timeout_s``), all with the same ``start_at``, ``player_lead_s`` from then: frame k
-    leaves every drone host at the same time, as from cameras on a common clock. Returns label -> Popen;
+    processes in their hosts, the ground first. Once fuse has every drone's geometry stream connected
+    (``timeout_s``), ``matrix_bringup.start_signal`` ('ground/start_signal') waits for every player to be ready
+    and gives them all the same start time, ``player_lead_s`` later: frame k leaves every drone host at the
+    same time, as from cameras on a common clock; returns then (frame 0 leaves ``player_lead_s`` later) the
+    processes by label -> Popen;
     logs in ``log_dir/<label>.log`` (the probes': JSON lines, see matrix_bringup.link_probe)."""
     env, procs = host_env(discovery), {}
 
@@ -93,24 +96,32 @@ def start(
     run(GROUND, 'ground/probe', [*probe, '--fuse'])
     for view in image_probes:
         run(view, f'{view}/probe', [*probe, '--images', view])
-    players = []
+    players = 0
     for host in [GROUND, *d.drones]:
         for spec in d.hosts[host]:
             if spec.executable == 'bag_player':
-                players.append((host, spec))
-            else:
-                run(host, spec.label, command(spec))
+                players += 1
+                extra = sum(1 for v in image_probes if v == host)
+                params = {
+                    **spec.parameters,
+                    'start_topic': topics.PLAYER_START_TOPIC,
+                    'wait_for_subscribers': spec.parameters['wait_for_subscribers'] + extra,
+                }
+                spec = replace(spec, parameters=params)
+            run(host, spec.label, command(spec))
     _wait_connected(procs, log_path(log_dir, 'fuse'), len(d.drones), timeout_s)
-    start_at = time.time() + player_lead_s
-    for host, spec in players:
-        extra = sum(1 for v in image_probes if v == host)
-        params = {
-            **spec.parameters,
-            'start_at': start_at,
-            'wait_for_subscribers': spec.parameters['wait_for_subscribers'] + extra,
-        }
-        spec = replace(spec, parameters=params)
-        run(host, spec.label, command(spec))
+    signal = [
+        sys.executable,
+        '-m',
+        'matrix_bringup.start_signal',
+        '--players',
+        str(players),
+        '--lead',
+        str(player_lead_s),
+    ]
+    run(GROUND, 'ground/start_signal', signal)
+    started = log_path(log_dir, 'ground/start_signal')
+    _wait(lambda: 'players ready' in started.read_text(), procs, timeout_s, f'every player to be ready ({started})')
     return procs
 
 

@@ -64,6 +64,7 @@ OCCUPANCY_GRID_TYPE = 'nav_msgs/msg/OccupancyGrid'
 DIAGNOSTIC_ARRAY_TYPE = 'diagnostic_msgs/msg/DiagnosticArray'
 
 FRAME_DONE_TOPIC = '/graph_monitor/frame_done'  # graph_monitor: the stamp of each frame every stage finished
+PLAYER_START_TOPIC = '/bag_player/start'  # the wall time the players of every host start (start_signal)
 
 # The message type of every stream: per drone, graph-wide (relative names) and absolute.
 DRONE_STREAM_TYPES = {
@@ -95,6 +96,7 @@ ABSOLUTE_TOPIC_TYPES = {
     FRAME_DONE_TOPIC: HEADER_TYPE,
     TF_TOPIC: TF_TYPE,
     TF_STATIC_TOPIC: TF_TYPE,
+    PLAYER_START_TOPIC: HEADER_TYPE,
 }
 
 

@@ -21,15 +21,19 @@ deterministic), 4 when the bag is damaged (cut short, overwritten: the frames be
 the error says where it stopped; ``matrix_core.bags.salvage``), 1 when nothing was played.
 """
 
+import math
 import time
 from pathlib import Path
 
 import rclpy
 from rclpy.duration import Duration
 from rosgraph_msgs.msg import Clock
+from std_msgs.msg import Header
 
 from matrix_core.bags.clock import read_sequence_clock
 from matrix_core.bags.salvage import BagDamaged, connections, raw_messages
+from matrix_core.message_fields import stamp_seconds
+from matrix_core.site.parameter import check_bag_drones, named_site
 from matrix_ros.connect import SubscribersReady
 from matrix_ros.conversions import seconds_to_stamp
 from matrix_ros.executor import make_executor
@@ -47,7 +51,9 @@ class BagPlayer(SettingsNode):
         if not (Path(s.bag) / 'metadata.yaml').is_file():
             raise FileNotFoundError(f'not a rosbag2 folder (no metadata.yaml): {s.bag}')
         self.sequence_clock = read_sequence_clock(s.bag, note=self.get_logger().warning)
-        self.topics = {t: msgtype for t, msgtype in connections(s.bag).items() if not s.topics or t in s.topics}
+        recorded = connections(s.bag)
+        check_bag_drones(named_site(s.site), recorded, s.bag)  # another site's recording: refused before playing
+        self.topics = {t: msgtype for t, msgtype in recorded.items() if not s.topics or t in s.topics}
         self.damage = ''  # why the bag could not be played to its end ('' when it was)
         qos = publisher_qos(s.qos)
         self.pubs = {t: self.create_publisher(message_class(msgtype), t, qos) for t, msgtype in self.topics.items()}
@@ -75,6 +81,17 @@ class BagPlayer(SettingsNode):
         deadline = time.monotonic() + seconds
         while rclpy.ok() and time.monotonic() < deadline and not until():
             self.spinner.spin_once(timeout_sec=min(0.05, max(0.0, deadline - time.monotonic())))
+
+    def _start_time(self, topic: str) -> float:
+        """The wall time the first frame is due: the stamp of the one Header on ``topic`` (0 if stopped first)."""
+        got = []
+        sub = self.create_subscription(
+            Header, topic, lambda msg: got.append(stamp_seconds(msg.stamp)), qos_by_name('history', 1)
+        )
+        self.get_logger().info(f'ready; waiting for the start time on {topic}')
+        self._spin_for(math.inf, lambda: bool(got))
+        self.destroy_subscription(sub)
+        return got[0] if got else 0.0
 
     def frames(self):
         """Yield (bag time ns, [(topic, raw bytes)]) grouped by identical bag time. A damaged bag ends with
@@ -111,9 +128,10 @@ class BagPlayer(SettingsNode):
         if self.lockstep_sub is not None and self.lockstep_sub.get_publisher_count() < 1:
             self.get_logger().info(f'waiting for a publisher on {s.lockstep_topic}')
             self._spin_for(3600, lambda: self.lockstep_sub.get_publisher_count() >= 1)
+        start_at = self._start_time(s.start_topic) if s.start_topic else s.start_at
         count, previous_ns, wall_start, bag_start = 0, None, time.monotonic(), None
-        if s.start_at:  # players of several hosts release frame k together (cameras on a common clock)
-            wall_start += s.start_at - time.time()
+        if start_at:  # players of several hosts release frame k together (cameras on a common clock)
+            wall_start += start_at - time.time()
         for time_ns, group in self.frames():
             if not rclpy.ok():
                 break
@@ -121,7 +139,7 @@ class BagPlayer(SettingsNode):
                 bag_start = time_ns
             if not s.lockstep:  # recorded timing, scaled
                 due = wall_start + (time_ns - bag_start) * 1e-9 / s.rate
-                if s.start_at and time.monotonic() - due > 0.5 * self.sequence_clock.frame_period / s.rate:
+                if start_at and time.monotonic() - due > 0.5 * self.sequence_clock.frame_period / s.rate:
                     self.skipped += 1  # ready too late for it: a live camera publishes the present
                     continue
                 self._spin_for(max(0.0, due - time.monotonic()))

@@ -2,12 +2,14 @@
 
 from dataclasses import dataclass, field
 
+from matrix_core.site.parameter import site_field
 from matrix_ros.qos import qos_by_name
 
 
 @dataclass
 class BagPlayerSettings:
     bag: str = field(default='', metadata={'help': 'rosbag2 folder to play'})
+    site: str = site_field()  # a bag naming drones the site lacks is refused before anything is played
     rate: float = field(default=1.0, metadata={'help': 'speed factor of the recorded timing (without lockstep)'})
     topics: list[str] = field(default_factory=list, metadata={'help': 'topics to play (empty = all)'})
     lockstep: bool = field(default=False, metadata={'help': 'wait for lockstep_topic before each next frame'})
@@ -41,6 +43,14 @@ class BagPlayerSettings:
             'help': 'without lockstep: wall-clock time (Unix seconds) at which the first frame is due, frame k '
             'k periods later, so that the players of several hosts publish each frame together; frames '
             'due before the player is ready are skipped (0: start when ready)'
+        },
+    )
+    start_topic: str = field(
+        default='',
+        metadata={
+            'help': 'without lockstep: once ready (its subscribers matched), subscribe this topic and wait for one '
+            'std_msgs/Header whose stamp is the start_at of the players of every host (published once they all '
+            'are ready, so no player starts late: matrix_bringup.start_signal); empty: start_at as given'
         },
     )
     qos: str = field(default='reliable', metadata={'help': 'QoS of the published topics: reliable or sensor_data'})
