@@ -24,6 +24,7 @@ def record(
     seed=-1,
     ransac_seed=None,
     frames=QUICK.transfer_frames,
+    hota=0.55,
 ):
     det = {
         'moda': moda,
@@ -75,6 +76,8 @@ def record(
         'trained': {'frames': [0, frames - 1]},
         'detection': det,
         'tracking': trk,
+        # a record written before evaluations reported HOTA has none (its HOTA cells read n/a)
+        **({} if hota is None else {'hota': {'hota': hota, 'det_a': 0.65, 'ass_a': hota**2 / 0.65, 'gate': 1.0}}),
     }
 
 
@@ -137,7 +140,8 @@ def variant_rows(size):
     records = []
     for variant, model, base in (('simple', 'simple_s0', 0.90), ('complex', 'complex_s0', 0.80)):
         for i, source in enumerate(('registration', 'pnp', 'pnp_stale', 'ground_truth', 'frozen_first', 'reference')):
-            records.append(record(model, variant, base - 0.01 * i, calibration=source))
+            old = variant == 'simple' and source == 'ground_truth'
+            records.append(record(model, variant, base - 0.01 * i, calibration=source, hota=None if old else 0.55))
         records.append(record(f'{variant}_static', variant, 0.0333, 0.0444, calibration='frozen_first'))
     records += [
         record(f'complex_s{s}', 'complex', m, calibration='registration')
@@ -192,7 +196,10 @@ def test_report_tables_hold_the_given_numbers_and_the_papers(tmp_path, size):
     # 1: per variant, the live pipeline first, PnP beside it, the oracle and static rows labelled, paper rows.
     simple, complex_ = section(text, '### Simple variant'), section(text, '### Complex variant')
     live = row(simple, '| **ours, live pipeline** (registration homographies) |')
-    assert '| `registration` | 90.0 | 75.0 | 90.0 | 85.0 | 50.0 | 80.0 | 60.0 | 70.0 | 10.0 |' in live
+    assert live.endswith(
+        '| `registration` | 90.0 | 75.0 | 90.0 | 85.0 | 50.0 | 80.0 | 60.0 | 70.0 | 10.0 | 55.0 | 65.0 | 46.5 |'
+    )
+    assert row(simple, '| oracle geometry').endswith('| 70.0 | 10.0 | n/a | n/a | n/a |')  # written without HOTA
     assert '| n/a |' in row(simple, '| ours, PnP route |') and 'no source XYZ here' in text
     assert '| 87.0 |' in row(simple, '| oracle geometry (simulator calibration) |')
     assert '| 80.0 |' in row(complex_, '| **ours, live pipeline**')
@@ -204,12 +211,13 @@ def test_report_tables_hold_the_given_numbers_and_the_papers(tmp_path, size):
     for part, variant in ((simple, 'simple'), (complex_, 'complex')):
         static = row(part, '| static-trained model')
         assert f'`{variant}_static`' in static and '| 3.3 |' in static and '| 4.4 |' in static
-    # Paper rows in their columns (DETAIL: MODA MODP precision recall MOTA MOTP IDF1 MT ML).
-    assert row(simple, '| paper: EarlyBird |').endswith('|  |  | 94 |  |  | 95.9 |  |  |  |  |  |')
-    assert row(simple, '| paper: TrackTacular |').endswith('|  |  |  |  |  |  | 92.7 |  | 79.64 |  |  |')
+    # Paper rows in their columns (DETAIL: MODA MODP precision recall MOTA MOTP IDF1 MT ML HOTA DetA AssA).
+    assert row(simple, '| paper: EarlyBird |').endswith('|  |  | 94 |  |  | 95.9 |  |  |  |  |  |  |  |  |')
+    assert row(simple, '| paper: TrackTacular |').endswith('|  |  |  |  |  |  | 92.7 |  | 79.64 |  |  |  |  |  |')
     assert 'marginally lower' in row(simple, '| paper: the proposed method')
-    assert row(complex_, '| paper: TrackTacular |').endswith('|  |  | 5.72 |  |  |  | 31.44 |  |  | 0 |  |')
-    assert row(complex_, '| paper: proposed |').endswith('|  |  | ~89 |  | ~97 | ~86 | ~88.5 |  |  | ~80 |  |')
+    assert row(complex_, '| paper: TrackTacular |').endswith('|  |  | 5.72 |  |  |  | 31.44 |  |  | 0 |  |  |  |  |')
+    assert row(complex_, '| paper: proposed |').endswith('|  |  | ~89 |  | ~97 | ~86 | ~88.5 |  |  | ~80 |  |  |  |  |')
+    assert '| HOTA | DetA | AssA |' in simple and 'HOTA/DetA/AssA as TrackEval computes them' in text
     # 2: transfer sweep, every share, the paper's figures beside the 50 % rows, and the discussion.
     transfer = section(text, '## 2. Transfer')
     for share in size.transfer_shares:
@@ -222,12 +230,14 @@ def test_report_tables_hold_the_given_numbers_and_the_papers(tmp_path, size):
             share == 0.5
         )
     assert '| 33.3 |' in row(transfer, '| 0 % | 0 | `complex_s0` without fine-tuning |')
+    assert '| 60.0 | 55.0 | 65.0 | 46.5 |' in row(transfer, '| 0 % | 0 | `complex_s0` without fine-tuning |')
     assert '**Discussion' in transfer and '+15 MODA points at 50 %' in transfer
     # 3: mean +- std over the subsets, with the paper's dropout figures for that variant and rate.
     quarter, three_quarters = row(text, '| complex | 0.25 |'), row(text, '| complex | 0.75 |')
     assert '| 72.0 ± 2.0 |' in quarter and 'MODA >80; MOTA >80' in quarter
     assert '| 40.0 ± 10.0 |' in three_quarters and 'MODA ~36; MOTA ~40' in three_quarters
     assert '| 2 | 3 |' in row(text, '| complex | 0.75 |')  # 2 views kept, 3 subsets
+    assert quarter.endswith('| 80.0 ± 0.0 | 55.0 ± 0.0 | MODA >80; MOTA >80 |')  # MOTP, then HOTA
     # 4: RANSAC seeds on the main model with their mean +- std; training seeds as a second table.
     variation, training = section(text, '## 4. Run-to-run').split('### Training-seed variation')
     n = len(size.ransac_seeds)
@@ -248,7 +258,7 @@ def test_report_tables_hold_the_given_numbers_and_the_papers(tmp_path, size):
     assert (
         row(real_data, '| `detector_seed1.pt` (sha256 abababababab) |')
         == '| `detector_seed1.pt` (sha256 abababababab) | 10 | 99.0 | 75.0 | 90.0 | 85.0 | 92.5 '
-        '| 80.0 | 60.0 | 70.0 | 10.0 |'
+        '| 80.0 | 60.0 | 70.0 | 10.0 | 55.0 | 65.0 | 46.5 |'
     )
     assert 'real validation set' in real_data and 'no test accuracy' in real_data and 'run_graph' in real_data
     # settings and machine.

@@ -19,7 +19,8 @@ CODE_PATHS = {
     'calibrate': (CORE + 'calib',),
     'register': (CORE + 'register',),
     'train': BEV_CODE,
-    'evaluate': BEV_CODE,
+    # an evaluation tracks its detections and scores them: tracker or metric changes change its numbers
+    'evaluate': (*BEV_CODE, CORE + 'tracking', CORE + 'metrics'),
     'readers': (CORE + 'datasets',),
     'live_graph': (
         CORE + 'calib',
@@ -27,6 +28,7 @@ CODE_PATHS = {
         CORE + 'bev',
         CORE + 'fusion',
         CORE + 'tracking',
+        CORE + 'metrics',
         *(
             f'ros2_ws/src/{pkg}'
             for pkg in ('matrix_calib', 'matrix_register', 'matrix_bev_tracker', 'matrix_ros', 'matrix_bringup')

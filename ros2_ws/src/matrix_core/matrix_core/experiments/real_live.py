@@ -109,6 +109,7 @@ def run_live_real(p: dict, out: Path, run_dir: Path, progress: bool, log) -> Non
         'path': str(root),
         'detection': live['detection'],
         'tracking': live['tracking'],
+        'hota': live.get('hota'),
         'image_plane_all': live.get('image_plane', {}).get('per_drone', {}).get('all'),
         'frames_without_tracks': live.get('frames_without_tracks'),
     }

@@ -7,6 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
+
+def _hota(field: str):
+    """Reads ``hota[field]`` in percent; None for a record written before evaluations reported HOTA."""
+    return lambda r: 100 * r['hota'][field] if r.get('hota') else None
+
+
 # Metric name -> how to read it (in percent) from a metrics.json record.
 METRICS = {
     'MODA': lambda r: 100 * r['detection']['moda'],
@@ -18,6 +24,9 @@ METRICS = {
     'IDF1': lambda r: 100 * r['tracking']['idf1'],
     'MT': lambda r: 100 * r['tracking']['mostly_tracked'] / max(r['tracking']['num_gt_ids'], 1),
     'ML': lambda r: 100 * r['tracking']['mostly_lost'] / max(r['tracking']['num_gt_ids'], 1),
+    'HOTA': _hota('hota'),
+    'DetA': _hota('det_a'),
+    'AssA': _hota('ass_a'),
 }
 
 

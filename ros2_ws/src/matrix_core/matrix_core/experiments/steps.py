@@ -77,8 +77,10 @@ def scaled_calib_config(variant: str, width: int, height: int, path: Path) -> Pa
 
 def run_calibrate(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    config = scaled_calib_config(p['variant'], *p['image_size'], out / 'calib_scene.yaml')
-    # --write-stale: the pnp_stale source uses the stale frames' last good poses (as the live node republishes them)
+    # beside the step's folder, not in it: calibrate refuses an output folder that contains one of its inputs
+    config = scaled_calib_config(p['variant'], *p['image_size'], out.with_name(f'{out.name}.calib_scene.yaml'))
+    # --write-stale: the pnp_stale source uses the stale frames' last good poses (as the live node republishes them);
+    # --overwrite: the folder holds the step's own log (_cli); the runner empties it before each run
     _cli(
         [
             'calibrate',
@@ -89,6 +91,7 @@ def run_calibrate(p: dict, out: Path, run_dir: Path, progress: bool, log) -> Non
             str(config),
             '--compare',
             '--write-stale',
+            '--overwrite',
         ],
         out,
         'calibrate.log',
@@ -208,6 +211,7 @@ def run_evaluate(p: dict, out: Path, run_dir: Path, progress: bool, log, device:
         'views_used': list(p['views'] or data.views),
         'detection': result.detection.as_dict(),
         'tracking': result.tracking.as_dict(),
+        'hota': result.hota.as_dict(),
         'num_frames': len(data.frames),
         'eval_s': time.perf_counter() - start,
         'failures': result.failures_dict(),
