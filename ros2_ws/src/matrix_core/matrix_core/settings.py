@@ -92,8 +92,12 @@ def add_settings_arguments(parser: argparse.ArgumentParser, cls) -> None:
 
 
 def settings_from_namespace(cls, namespace: argparse.Namespace):
-    """Build ``cls`` from parsed flags; the dataclass's own ``__post_init__`` validates values."""
-    return cls(**{name: getattr(namespace, name) for name, *_ in settings_fields(cls)})
+    """Build ``cls`` from parsed flags; the dataclass's own ``__post_init__`` validates values. A dataclass with
+    a ``site`` field takes the site's values where its flags were left at their MATRIX defaults
+    (``matrix_core.site.parameter.follow_site``)."""
+    from matrix_core.site.parameter import follow_site  # the site package reads its files with this module
+
+    return follow_site(cls(**{name: getattr(namespace, name) for name, *_ in settings_fields(cls)}))
 
 
 def setting_to_string(value) -> str:

@@ -11,6 +11,7 @@ The ``launch`` packages are imported inside the functions: this module is import
 """
 
 from matrix_core.settings import setting_to_string, settings_fields, settings_from_strings
+from matrix_core.site.parameter import follow_site
 
 
 def declare_arguments(cls, defaults: dict = None, required=()) -> list:
@@ -30,15 +31,18 @@ def declare_arguments(cls, defaults: dict = None, required=()) -> list:
     return args
 
 
-def settings_from_launch(cls, context, other_arguments=()):
+def settings_from_launch(cls, context, other_arguments=(), defaults: dict = None):
     """``cls`` filled from the launch arguments of the same names (resolved in ``context``); validated. An
     argument given on the command line that is neither a field nor in ``other_arguments`` (the launch file's
-    own) is a ValueError naming it, the closest and all of them: launch would ignore it silently."""
+    own) is a ValueError naming it, the closest and all of them: launch would ignore it silently. With a
+    ``site`` field, the arguments left at their MATRIX defaults (``defaults``: the launch file's own, see
+    :func:`declare_arguments`) take the site's values (``matrix_core.site.parameter.follow_site``)."""
     from launch.substitutions import LaunchConfiguration
 
     names = [name for name, *_ in settings_fields(cls)]
     check_arguments(context.argv or (), [*names, *other_arguments])
-    return settings_from_strings(cls, {name: LaunchConfiguration(name).perform(context) for name in names})
+    settings = settings_from_strings(cls, {name: LaunchConfiguration(name).perform(context) for name in names})
+    return follow_site(settings, defaults)
 
 
 def check_arguments(argv, known) -> None:
@@ -78,7 +82,7 @@ def settings_launch_description(package: str, executable: str, cls, defaults: di
     from launch_ros.actions import Node
 
     def node(context):
-        settings = settings_from_launch(cls, context)
+        settings = settings_from_launch(cls, context, defaults=defaults)
         return [
             Node(
                 package=package,

@@ -2,6 +2,7 @@
 
 A node's settings dataclass is ``class XNodeSettings(NodeSettings, XSettings)``: the node's wiring and its
 component's settings on one shared base (``matrix_core.settings.Settings``), each class checking its own fields.
+Every processing node takes the ``site`` parameter here (``matrix_core.site.parameter.SiteSettings``).
 """
 
 from dataclasses import dataclass, field
@@ -9,12 +10,13 @@ from dataclasses import dataclass, field
 import cv2
 from threadpoolctl import threadpool_limits
 
-from matrix_core.settings import Settings
+from matrix_core.site.parameter import SiteSettings
+from matrix_core.threads import ThreadSettings
 from matrix_ros.qos import QOS_NAMES, qos_by_name
 
 
 @dataclass
-class NodeSettings(Settings):
+class NodeSettings(SiteSettings, ThreadSettings):
     qos: str = field(
         default='reliable',
         metadata={
@@ -22,18 +24,9 @@ class NodeSettings(Settings):
             'survive; sensor_data: best effort)'
         },
     )
-    threads: int = field(
-        default=1,
-        metadata={
-            'help': 'OpenCV and BLAS (numpy) worker threads of this process (1: one core; idle pool threads of '
-            'many processes on few cores cost CPU)'
-        },
-    )
 
     def check(self) -> None:
         qos_by_name(self.qos)  # raises naming the valid names
-        if self.threads < 1:
-            raise ValueError(f'threads must be >= 1, got {self.threads}')
 
     def apply_threads(self) -> None:
         """Limit OpenCV's and numpy's BLAS worker pools of this process to ``threads``.

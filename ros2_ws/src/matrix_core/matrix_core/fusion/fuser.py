@@ -2,6 +2,7 @@
 (so live == offline), ``bev.inference.SequenceRunner`` (temporal features), then ``tracking.BevTracker``.
 """
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -67,6 +68,24 @@ class FuseResult:
         return [v for v, s in self.views.items() if s.available]
 
 
+def network_grid(bev_settings, settings: FuseSettings):
+    """The BEV grid the network runs on: the settings' ``area`` (a site's) plus the checkpoint's margin, in the
+    checkpoint's cells. The network is convolutional over the grid (encoder per image, lifting, pooling over
+    views, temporal and head convolutions), so the area may be any size; the cell may not: the detector learnt
+    the size of people in cells of the checkpoint's ``cell_m``. Another cell is a ValueError naming the site,
+    the checkpoint and both cells."""
+    cell = float(bev_settings.cell_m)
+    if abs(float(settings.cell_m) - cell) > 1e-9:
+        site = getattr(settings, 'site', '')
+        where = f'site {site}' if site else 'the settings'
+        raise ValueError(
+            f'{where}: BEV cell {settings.cell_m:g} m, but checkpoint {settings.checkpoint_path()} was trained on '
+            f'cells of {cell:g} m; train a detector for this site (matrix-tracker train --site) or give a '
+            f'checkpoint of {settings.cell_m:g} m cells'
+        )
+    return dataclasses.replace(bev_settings, area=list(settings.area)).grid()
+
+
 class BevFuser:
     """Stateful fusion of a stream of frames (call :meth:`process` in stamp order).
 
@@ -88,7 +107,7 @@ class BevFuser:
         if model is None:
             model, bev_settings = load_model(settings.checkpoint_path(), settings.decode_overrides())
         self.model, self.bev_settings = model.to(self.device).eval(), bev_settings
-        self.grid = bev_settings.grid(settings.area)
+        self.grid = network_grid(bev_settings, settings)
         self.input_size = (bev_settings.image_width, bev_settings.image_height)
         self.runner = SequenceRunner(self.model, bev_settings, self.grid)
         self.tracker = BevTracker(settings.tracker_settings())

@@ -7,9 +7,12 @@ from matrix_core import topics
 from matrix_core.datasets.matrix_conventions import MATRIX_AREA, MATRIX_VIEWS
 from matrix_core.device import DeviceSettings
 from matrix_core.settings import check_area
+from matrix_core.site.shipped import matrix_site
 from matrix_core.sync.stamp_restart import RestartSettings
+from matrix_core.threads import ThreadSettings
 from matrix_core.tracking.settings import TrackerSettings
 
+MATRIX_CELL_M = matrix_site().cell_m
 INPUT_KINDS = ('homography', 'camera_info')
 IMAGE_KINDS = ('raw', 'compressed', 'both')
 
@@ -36,7 +39,7 @@ def resolve_checkpoint(checkpoint: str) -> Path:
 
 
 @dataclass
-class FuseSettings(DeviceSettings, RestartSettings, TrackerSettings):
+class FuseSettings(DeviceSettings, RestartSettings, TrackerSettings, ThreadSettings):
     """Everything the fusion of N views needs. Seconds, metres. ``frame_interval_s`` (from the tracker
     settings) is the frame period of the streams; ``device`` (``matrix_core.device``) where the network runs."""
 
@@ -88,11 +91,18 @@ class FuseSettings(DeviceSettings, RestartSettings, TrackerSettings):
             '(e.g. detector_tiny_seed0.pt, the faster detector); empty: the shipped default detector_seed1.pt'
         },
     )
-    threads: int = field(default=1, metadata={'help': 'torch and OpenCV CPU threads (1: one core, as benchmarked)'})
     area: list[float] = field(
         default_factory=lambda: list(MATRIX_AREA),
         metadata={
-            'help': 'scene x_min y_min x_max y_max (m) when the checkpoint has no area; the grid adds its margin'
+            'help': 'scene x_min y_min x_max y_max (m): the BEV grid covers it (plus the checkpoint\'s margin); the '
+            'network is convolutional over the grid, so any area runs'
+        },
+    )
+    cell_m: float = field(
+        default=MATRIX_CELL_M,
+        metadata={
+            'help': 'BEV cell (m) of the scene: must be the checkpoint\'s (the detector learnt people\'s size in its '
+            'cells); a site with another cell needs a detector trained for it'
         },
     )
     score_threshold: float = field(
@@ -125,8 +135,10 @@ class FuseSettings(DeviceSettings, RestartSettings, TrackerSettings):
             if '{view}' not in getattr(self, name) and (getattr(self, name) or name != 'dropped_topic'):
                 raise ValueError(f'{name} must contain {{view}}, got {getattr(self, name)!r}')
         check_area(self.area)
-        if self.sync_timeout < 0 or self.threads < 1 or self.temporal_reset_gap_s <= 0 or self.tracker_reset_gap_s <= 0:
-            raise ValueError('sync_timeout >= 0, threads >= 1 and the reset gaps > 0 are required')
+        if not self.cell_m > 0:
+            raise ValueError(f'cell_m must be positive, got {self.cell_m}')
+        if self.sync_timeout < 0 or self.temporal_reset_gap_s <= 0 or self.tracker_reset_gap_s <= 0:
+            raise ValueError('sync_timeout >= 0 and the reset gaps > 0 are required')
 
     def topic(self, pattern: str, view: str) -> str:
         """A pattern's topic for ``view``: '{view}/image_raw' -> 'D3/image_raw' (= topics.drone_topic)."""
