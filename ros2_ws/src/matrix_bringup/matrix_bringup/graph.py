@@ -31,6 +31,8 @@ from matrix_core import topics
 from matrix_core.bags.salvage import topic_counts
 from matrix_core.datasets.matrix_conventions import MATRIX_VIEWS
 from matrix_core.settings import setting_to_string
+from matrix_core.site import matrix_site
+from matrix_core.site.parameter import check_drones, named_site, recorded_drones, site_field
 
 _log = logging.getLogger(__name__)
 
@@ -58,7 +60,10 @@ class GraphSettings:
             "register's references and calib's first prior"
         },
     )
-    views: list[str] = field(default_factory=lambda: list(VIEWS), metadata={'help': 'drones to run'})
+    site: str = site_field()
+    views: list[str] = field(
+        default_factory=lambda: list(VIEWS), metadata={'help': "drones to run; default: the site's drones"}
+    )
     drones_per_process: int = field(
         default=1,
         metadata={
@@ -253,6 +258,7 @@ class BagFacts:
     frames: int
     has_ground_truth: bool
     topics: tuple = ()
+    drones: tuple = ()  # every drone the bag's topics name (matrix_core.site.parameter.recorded_drones)
 
     @classmethod
     def read(cls, bag: str, views) -> 'BagFacts':
@@ -280,7 +286,7 @@ class BagFacts:
         gt = all(topics.camera_info_topic(v) in counts for v in views)
         drone = [n.split('/')[1] for n in counts]  # '/D3/image_raw' -> 'D3'
         played = tuple(sorted(n for n, d in zip(counts, drone) if d in views or not re.fullmatch(r'D\d+', d)))
-        return cls(bool(compressed), max(raw or compressed), gt, played)
+        return cls(bool(compressed), max(raw or compressed), gt, played, tuple(recorded_drones(counts)))
 
 
 def player_exit_text(code: int) -> str:
@@ -300,20 +306,25 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
     if not s.bag or not s.dataset:
         raise ValueError('bag and dataset are required')
     bag = bag or BagFacts.read(s.bag, s.views)
+    site = named_site(s.site)  # before anything starts: a bad site file, drones the site lacks
+    check_drones(site, s.views, 'views')
+    check_drones(site, bag.drones, f'bag {s.bag}')
     if s.monitor and not bag.has_ground_truth:
         raise ValueError(f'{s.bag} has no ground_truth/camera_info for every view: the monitor cannot score')
     sim = {'use_sim_time': True}
+    on_site = {'site': s.site}  # every node that takes the site: the same one
     calib = {
-        'config': s.calib_config or str(config_for_dataset(s.dataset)),
+        'config': s.calib_config or (str(config_for_dataset(s.dataset)) if site.path == matrix_site().path else ''),
         'prior_dataset': s.dataset,
         'qos': 'reliable',
         'compressed': bag.compressed,
         'use_registration': s.calib_registration,
+        **on_site,
         **sim,
     }
     if s.calib_registration and s.lockstep:  # as the fuse node: wait as long as the player, deterministic
         calib['registration_wait_s'] = s.lockstep_timeout
-    register = {'reference_dataset': s.dataset, 'compressed': bag.compressed, **sim}
+    register = {'reference_dataset': s.dataset, 'compressed': bag.compressed, **on_site, **sim}
     register_files = [s.register_params or share_file('matrix_register', 'config', 'register.yaml')]
     size = s.drones_per_process or len(s.views)
     groups = [list(s.views[i : i + size]) for i in range(0, len(s.views), size)]
@@ -359,6 +370,7 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
         'scene_dataset': s.dataset,
         **({'overlay': True} if s.overlay else {}),
         **({'checkpoint': s.checkpoint} if s.checkpoint else {}),
+        **on_site,
         **sim,
     }
     nodes.append(
@@ -416,6 +428,7 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
         'lockstep_timeout': s.lockstep_timeout,
         'lockstep_window': s.lockstep_window,
         **({'topics': list(bag.topics)} if bag.topics else {}),
+        **on_site,
     }
     if s.lockstep:
         done = topics.FRAME_DONE_TOPIC if s.monitor else topics.graph_topic(topics.TRACKS)
