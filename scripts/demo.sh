@@ -23,8 +23,13 @@ live_graph() {  # live_graph NAME BAG DATASET [ARG:=VALUE...]: the graph, then t
   local name=$1 bag=$2 dataset=$3; shift 3
   rm -rf "${OUT:?}/$name"
   mkdir -p "$OUT/$name/logs"
+  local live=()   # the live view (docs/live-view.md) where its port is free; DEMO_LIVE_VIEW=false: never
+  if [ "${DEMO_LIVE_VIEW:-true}" != false ] && python -c "import socket; socket.create_server(('', 8765)).close()" 2>/dev/null; then
+    live=(live_view:=true)
+    echo "   live view: open ws://localhost:8765 in Foxglove or Lichtblick (layout: ros2_ws/src/matrix_live_view/config/foxglove_layout.json)"
+  fi
   local args=(bag:="$bag" dataset:="$dataset" drones_per_process:=4 monitor:=true monitor_out:="$OUT/$name"
-              record:="$OUT/$name/recording" overlay:=true "$@")
+              record:="$OUT/$name/recording" overlay:=true "${live[@]}" "$@")
   if command -v ros2 >/dev/null 2>&1; then   # the path users take; it ends by itself after the bag
     echo "== $name: live graph (ROS_DOMAIN_ID=$ROS_DOMAIN_ID): ros2 launch matrix_bringup full_graph.launch.py ${args[*]}"
     if ! ROS_LOG_DIR="$OUT/$name/logs" ros2 launch matrix_bringup full_graph.launch.py "${args[@]}" \

@@ -57,6 +57,7 @@ def test_what_crosses_each_link_and_its_qos(settings):
         'D2/pose',
         'D2/ground_truth/camera_info',
         '/diagnostics',
+        '/tf',  # recorded: a recording opens in a viewer with the cameras placed
     }
     assert all(st.direction == UP for st in link.values())  # the ground sends nothing back but acks
     assert not any(st.direction == DOWN for streams in d.links.values() for st in streams)

@@ -2,14 +2,22 @@
 (one drone process - calib + register - per drone, fuse, recorder, graph monitor: separate processes over DDS),
 exactly as `full_graph.launch.py` would start it. What the graph published is scored: the monitor's
 calibration/registration errors, and the recording's tracks against the bag's ground truth. Every frame
-must reach every stage, and no process may outlive the run."""
+must reach every stage, and no process may outlive the run. The same replay serves clients of the standard
+interfaces: a subscriber that knows only vision_msgs and tf2_msgs (its twins must equal what was recorded) and
+a Foxglove WebSocket client of the live view (every kind of message decoded)."""
 
 import csv
 import json
+import math
 import os
+import socket
 import subprocess
+import sys
+from pathlib import Path
 
+import numpy as np
 import pytest
+from foxglove_client import FoxgloveClient
 
 from matrix_core.bags import write_sequence_bag
 from matrix_core.cli.main import main as cli
@@ -18,6 +26,7 @@ from matrix_core.evaluation.recording import read_recording_bag
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 VIEWS = ['D1', 'D5']
+HELPERS = Path(__file__).resolve().parents[1] / 'helpers'
 
 
 def test_whole_graph_on_the_real_sample(matrix_sample, node_executable, tmp_path):
@@ -40,9 +49,25 @@ def test_whole_graph_on_the_real_sample(matrix_sample, node_executable, tmp_path
         str(logs),
         '--lockstep_timeout',
         '150',
+        '--live_view',
+        '--live_view_port',
+        str(port := _free_port()),
     ]  # the 1080p board search is slow on 2 loaded cores
     before = set(_node_processes())
-    run = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    standard = tmp_path / 'standard.json'
+    subscriber = subprocess.Popen(
+        [sys.executable, str(HELPERS / 'standard_subscriber.py'), str(standard), *VIEWS],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert subscriber.stdout.readline().strip() == 'subscribed'
+    watcher = FoxgloveClient(f'ws://127.0.0.1:{port}', timeout_s=300)
+    try:
+        run = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    finally:
+        watcher.close()
+        subscriber.terminate()
+        subscriber.wait(30)
     node_logs = {p.name: p.read_text() for p in logs.glob('*.log')}
     assert run.returncode == 0, (
         run.stdout + run.stderr + '\n'.join(f'== {k}\n{v[-3000:]}' for k, v in node_logs.items())
@@ -54,6 +79,7 @@ def test_whole_graph_on_the_real_sample(matrix_sample, node_executable, tmp_path
             'fuse.log',
             'recorder.log',
             'graph_monitor.log',
+            'live_view.log',
             'bag_player.log',
         ]
     )
@@ -95,6 +121,77 @@ def test_whole_graph_on_the_real_sample(matrix_sample, node_executable, tmp_path
     live = json.loads(scores.read_text())
     assert live['frames_without_tracks'] == [] and live['detections_source'] == 'detections'
     assert live['detection']['recall'] > 0.2  # two real views, the shipped checkpoint: people are found
+    _check_standard_twins(json.loads(standard.read_text()), rec)
+    _check_live_view(watcher)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(('127.0.0.1', 0))
+        return s.getsockname()[1]
+
+
+def _recorded(recording, names) -> dict:
+    """topic -> [(stamp, message)] of the recording, deserialised with the types the bag itself carries."""
+    from rosbags.highlevel import AnyReader
+
+    found = {n: [] for n in names}
+    with AnyReader([recording]) as reader:
+        for conn, _, raw in reader.messages([c for c in reader.connections if c.topic in found]):
+            msg = reader.deserialize(raw, conn.msgtype)
+            found[conn.topic].append((round(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, 6), msg))
+    return found
+
+
+def _check_standard_twins(got, recording):
+    """What a vision_msgs / tf2_msgs subscriber received equals the recorded matrix_msgs and poses: every /tracks
+    message has its Detection3DArray twin (same ids, positions within 1 mm), every drone's detections_2d its
+    Detection2DArray, every pose its /tf transform (1 mm, 0.01 deg)."""
+    assert got['modules'] == []  # it imported none of ours
+    names = ['/tracks', *(f'/{v}/{s}' for v in VIEWS for s in ('detections_2d', 'pose'))]
+    rec = _recorded(recording, names)
+    twins = {round(m['stamp'], 6): m for m in got['tracks']}
+    assert sorted(twins) == [stamp for stamp, _ in rec['/tracks']] and len(twins) == 5
+    for stamp, msg in rec['/tracks']:
+        twin = twins[stamp]
+        assert twin['frame'] == 'world' and [d['id'] for d in twin['detections']] == [str(t.id) for t in msg.tracks]
+        for d, t in zip(twin['detections'], msg.tracks):
+            assert math.dist(d['xyz'][:2], (t.position.x, t.position.y)) < 1e-3 and d['class'] == ['person']
+    assert any(m['detections'] for m in got['tracks']) and len(got['detections']) == 5
+    for v in VIEWS:
+        boxes = {round(m['stamp'], 6): m for m in got[f'{v}/detections_2d']}
+        assert sorted(boxes) == [stamp for stamp, _ in rec[f'/{v}/detections_2d']]
+        for stamp, msg in rec[f'/{v}/detections_2d']:
+            twin = boxes[stamp]
+            assert twin['frame'] == f'{v}/camera_optical'
+            assert [d['id'] for d in twin['detections']] == [str(b.id) for b in msg.detections]
+            for d, b in zip(twin['detections'], msg.detections):
+                assert d['center'] == pytest.approx([(b.x_min + b.x_max) / 2, (b.y_min + b.y_max) / 2], abs=1e-6)
+                assert d['size'] == pytest.approx([b.x_max - b.x_min, b.y_max - b.y_min], abs=1e-6)
+        cameras = {round(t['stamp'], 6): t for t in got['tf'] if t['child'] == f'{v}/camera_optical'}
+        assert sorted(cameras) == [stamp for stamp, _ in rec[f'/{v}/pose']] and cameras
+        for stamp, pose in rec[f'/{v}/pose']:
+            tf, p, q = cameras[stamp], pose.pose.position, pose.pose.orientation
+            assert tf['parent'] == 'world' and math.dist(tf['translation'], (p.x, p.y, p.z)) < 1e-3
+            cos_half = abs(float(np.dot(tf['rotation'], (q.x, q.y, q.z, q.w))))
+            assert math.degrees(2 * math.acos(min(1.0, cos_half))) < 0.01
+    assert [(t['parent'], t['child']) for t in got['tf_static']] == [('world', 'area')]
+
+
+def _check_live_view(watcher):
+    """The live view's channels as Foxglove lists them, and one decoded message of each kind."""
+    assert not watcher.errors, watcher.errors
+    overlays = [f'/{v}/overlay/compressed' for v in VIEWS]
+    wanted = ['/live_view/tracks', '/live_view/scene', '/bev_heatmap', '/tf', '/tf_static', *overlays]
+    assert set(wanted) <= set(watcher.channels) and all(watcher.counts.get(t) for t in wanted), watcher.counts
+    schemas = {t: watcher.channels[t]['schemaName'] for t in wanted}
+    assert schemas['/live_view/tracks'] == 'foxglove.SceneUpdate' and schemas['/bev_heatmap'] == 'foxglove.Grid'
+    assert schemas['/tf'] == 'foxglove.FrameTransforms' and schemas[overlays[0]] == 'foxglove.CompressedImage'
+    last = {t: m[-1][1] for t, m in watcher.messages.items()}
+    assert {e.id for e in last['/live_view/scene'].entities} >= {'area', 'obstacles', *(f'camera/{v}' for v in VIEWS)}
+    assert last['/bev_heatmap'].column_count > 0 and len(last['/bev_heatmap'].data) > 0
+    assert last[overlays[0]].data[:2] == b'\xff\xd8'  # a JPEG
+    assert {t.child_frame_id for t in last['/tf'].transforms} <= {f'{v}/camera_optical' for v in VIEWS}
 
 
 def test_bad_settings_fail_clearly(node_executable, tmp_path):

@@ -72,6 +72,11 @@ STREAMS = {
     ),
     topics.CAMERA_INFO: (topics.CAMERA_INFO_TYPE, 'reliable', 'tiny; the calibration of each frame'),
     topics.POSE: (topics.POSE_TYPE, 'reliable', 'tiny; recorded for evaluation'),
+    topics.TF_TOPIC: (
+        topics.TF_TYPE,
+        'reliable',
+        "tiny; calib's pose again as world -> Dn/camera_optical, for viewers (recorded, live view)",
+    ),
     topics.GROUND_TRUTH_CAMERA_INFO: (topics.CAMERA_INFO_TYPE, 'reliable', 'tiny; only the monitor reads it'),
     topics.DIAGNOSTICS_TOPIC: (
         topics.DIAGNOSTIC_ARRAY_TYPE,
@@ -162,6 +167,8 @@ def ground_reads(node: NodeSpec, view: str) -> list:
     if node.executable == 'recorder':
         recorded = set(p.get('topics', ()))
         return [st for st in STREAMS if topics.absolute(view, st) in recorded or st in recorded]
+    if node.executable == 'live_view':
+        return [topics.CAMERA_INFO, topics.TF_TOPIC]
     if node.executable == 'graph_monitor':
         return [topics.GROUND_TRUTH_CAMERA_INFO, topics.CAMERA_INFO, topics.HOMOGRAPHY, topics.DIAGNOSTICS_TOPIC]
     return []

@@ -37,7 +37,12 @@ from matrix_core.site.parameter import check_drones, named_site, recorded_drones
 _log = logging.getLogger(__name__)
 
 VIEWS = list(MATRIX_VIEWS)
-RECORDED = (*map(topics.graph_topic, (topics.TRACKS, topics.DETECTIONS, topics.BEV_HEATMAP)), topics.DIAGNOSTICS_TOPIC)
+RECORDED = (
+    *map(topics.graph_topic, (topics.TRACKS, topics.DETECTIONS, topics.BEV_HEATMAP)),
+    topics.DIAGNOSTICS_TOPIC,
+    topics.TF_TOPIC,  # the cameras: a recording opens in a viewer with them placed
+    topics.TF_STATIC_TOPIC,
+)
 PER_VIEW_RECORDED = (topics.CAMERA_INFO, topics.POSE, topics.HOMOGRAPHY, topics.DETECTIONS_2D)
 OVERLAY_RECORDED = topics.OVERLAY_COMPRESSED  # with GraphSettings.overlay
 DRONE_NODES = ('calib', 'register')  # the nodes of a drone process (matrix_bringup.drone)
@@ -111,6 +116,14 @@ class GraphSettings:
             'drawn (Dn/overlay/compressed)'
         },
     )
+    live_view: bool = field(
+        default=False,
+        metadata={
+            'help': 'also run live_view (matrix_live_view): the graph over the Foxglove WebSocket protocol on '
+            "ws://localhost:live_view_port for Foxglove or Lichtblick; fuse then publishes the drones' overlays"
+        },
+    )
+    live_view_port: int = field(default=topics.LIVE_VIEW_PORT, metadata={'help': "the live view's port"})
     sync_timeout: float = field(
         default=5.0,
         metadata={
@@ -368,7 +381,7 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
         'image_kind': 'compressed' if bag.compressed else 'raw',
         'sync_timeout': s.lockstep_timeout if s.lockstep else s.sync_timeout,
         'scene_dataset': s.dataset,
-        **({'overlay': True} if s.overlay else {}),
+        **({'overlay': True} if s.overlay or s.live_view else {}),
         **({'checkpoint': s.checkpoint} if s.checkpoint else {}),
         **on_site,
         **sim,
@@ -383,6 +396,16 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
             [s.fuse_params or share_file('matrix_bev_tracker', 'config', 'fuse.yaml')],
         )
     )
+    if s.live_view:
+        nodes.append(
+            NodeSpec(
+                'matrix_live_view',
+                'live_view',
+                'live_view',
+                '',
+                {'views': list(s.views), 'port': s.live_view_port, 'scene_dataset': s.dataset},
+            )
+        )
     if s.record:
         per_view = PER_VIEW_RECORDED + ((OVERLAY_RECORDED,) if s.overlay else ())
         recorded = [*RECORDED, *(topics.absolute(v, stream) for v in s.views for stream in per_view)]

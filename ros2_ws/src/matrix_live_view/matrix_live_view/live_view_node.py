@@ -36,23 +36,29 @@ from matrix_ros.qos import qos_by_name
 SCENE, TRACKS = '/live_view/scene', '/live_view/tracks'
 
 
+def channel_kinds(views) -> dict:
+    """Every channel the live view serves for ``views``: topic -> kind (``matrix_live_view.server.CHANNELS``)."""
+    return {
+        SCENE: 'scene',
+        TRACKS: 'scene',
+        topics.graph_topic(topics.BEV_HEATMAP): 'grid',
+        topics.TF_TOPIC: 'transforms',
+        topics.TF_STATIC_TOPIC: 'transforms',
+        **{topics.absolute(v, topics.CAMERA_INFO): 'calibration' for v in views},
+        **{topics.absolute(v, topics.OVERLAY_COMPRESSED): 'image' for v in views},
+    }
+
+
 class LiveViewNode(SettingsNode):
     def __init__(self, defaults: LiveViewSettings):
         super().__init__('live_view')
         self.settings = s = declare_settings(self, LiveViewSettings, defaults)
-        self.boxes = as_boxes(self._obstacles(s))
+        self.area, boxes = self._scene(s)
+        self.boxes = as_boxes(boxes)
         self.trails, self.last_stamp = Trails(s.trail_frames), None
-        self.frustums, self.static = {}, {}  # view -> SceneEntity; (parent, child) -> TransformStamped
+        self.frustums, self.cameras, self.static = {}, {}, {}  # by view; (parent, child) -> TransformStamped
         self.server = LiveServer(self.get_logger(), s.host, s.port, s.client_backlog)
-        self.topics = {
-            SCENE: 'scene',
-            TRACKS: 'scene',
-            '/' + topics.BEV_HEATMAP: 'grid',
-            topics.TF_TOPIC: 'transforms',
-            topics.TF_STATIC_TOPIC: 'transforms',
-            **{topics.absolute(v, topics.CAMERA_INFO): 'calibration' for v in s.views},
-            **{topics.absolute(v, topics.OVERLAY_COMPRESSED): 'image' for v in s.views},
-        }
+        self.topics = channel_kinds(s.views)
         for topic, kind in self.topics.items():  # advertised now: a client lists them all at once
             self.server.channel(kind, topic)
         reliable = qos_by_name('reliable')
@@ -81,16 +87,19 @@ class LiveViewNode(SettingsNode):
             'foxglove_layout.json'
         )
 
-    def _obstacles(self, s) -> list:
+    def _scene(self, s) -> tuple:
+        """(area, obstacle boxes): a simulated scene_dataset's own (its meta), else the parameters'."""
         if not s.scene_dataset:
-            return s.obstacle_boxes
+            return s.area, s.obstacle_boxes
         from matrix_core.datasets import DatasetError, MatrixDataset
 
         try:
-            return obstacles_from_meta(getattr(MatrixDataset(s.scene_dataset), 'meta', None), s.obstacle_boxes)
+            meta = getattr(MatrixDataset(s.scene_dataset), 'meta', None) or {}
         except DatasetError as exc:
-            self.get_logger().error(f'scene_dataset: {exc}; drawing obstacle_boxes')
-            return s.obstacle_boxes
+            self.get_logger().error(f'scene_dataset: {exc}; drawing area and obstacle_boxes')
+            return s.area, s.obstacle_boxes
+        area = (meta.get('simulator') or {}).get('config', {}).get('area') or s.area
+        return list(area), obstacles_from_meta(meta, s.obstacle_boxes)
 
     def _send(self, kind: str, topic: str, convert, msg) -> None:
         """``convert(msg)`` on ``topic`` if any client wants it; a message it cannot convert is logged, not fatal."""
@@ -108,7 +117,7 @@ class LiveViewNode(SettingsNode):
         self.last_stamp = stamp
         trails = self.trails.update((t.id, (t.position.x, t.position.y)) for t in msg.tracks)
         self._send('scene', TRACKS, lambda m: fm.tracks_update(m, trails), msg)
-        scene = fm.area_entities(msg.header.stamp, msg.header.frame_id or topics.WORLD_FRAME, s.area, self.boxes)
+        scene = fm.area_entities(msg.header.stamp, msg.header.frame_id or topics.WORLD_FRAME, self.area, self.boxes)
         self._send('scene', SCENE, lambda _: fm.SceneUpdate(entities=scene + list(self.frustums.values())), msg)
         if self.static:
             self._send(
@@ -119,7 +128,7 @@ class LiveViewNode(SettingsNode):
             )
 
     def _on_heatmap(self, msg: OccupancyGrid) -> None:
-        self._send('grid', '/' + topics.BEV_HEATMAP, fm.grid, msg)
+        self._send('grid', topics.graph_topic(topics.BEV_HEATMAP), fm.grid, msg)
 
     def _on_tf(self, msg: TFMessage) -> None:
         self._send('transforms', topics.TF_TOPIC, fm.frame_transforms, msg)
@@ -130,10 +139,13 @@ class LiveViewNode(SettingsNode):
         self._send('transforms', topics.TF_STATIC_TOPIC, fm.frame_transforms, msg)
 
     def _on_camera_info(self, view: str, msg: CameraInfo) -> None:
-        try:
-            self.frustums[view] = fm.frustum_entity(msg.header.stamp, view, msg, self.settings.frustum_depth_m)
-        except (ValueError, ArithmeticError) as exc:  # a singular K: no frustum for this camera
-            self.get_logger().error(f'{view}: camera_info not drawn: {exc}', throttle_duration_sec=5.0)
+        camera = (msg.header.frame_id, msg.width, msg.height, tuple(msg.k))  # the frustum changes with these only
+        if self.cameras.get(view) != camera:
+            try:
+                self.frustums[view] = fm.frustum_entity(msg.header.stamp, view, msg, self.settings.frustum_depth_m)
+                self.cameras[view] = camera
+            except (ValueError, ArithmeticError) as exc:  # a singular K: no frustum for this camera
+                self.get_logger().error(f'{view}: camera_info not drawn: {exc}', throttle_duration_sec=5.0)
         self._send('calibration', topics.absolute(view, topics.CAMERA_INFO), fm.calibration, msg)
 
     def close(self) -> None:

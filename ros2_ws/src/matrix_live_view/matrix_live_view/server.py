@@ -60,14 +60,17 @@ class LiveServer:
         sdk_log.propagate = False  # not also on the root logger's handlers
         foxglove.set_log_level('INFO')  # the SDK forwards its (Rust) log to Python logging from here on
         self.context = foxglove.Context()
-        self.server = foxglove.start_server(
-            name=name,
-            host=host,
-            port=port,
-            context=self.context,
-            server_listener=_Listener(logger),
-            message_backlog_size=backlog,
-        )
+        try:
+            self.server = foxglove.start_server(
+                name=name,
+                host=host,
+                port=port,
+                context=self.context,
+                server_listener=_Listener(logger),
+                message_backlog_size=backlog,
+            )
+        except RuntimeError as exc:  # the SDK's FoxgloveError, e.g. the port is taken
+            raise RuntimeError(f'live view: cannot serve on {host}:{port} ({exc}); choose another port') from exc
         self.channels = {}
 
     @property
