@@ -26,6 +26,8 @@ from matrix_core.calib.scene import load_scene
 from matrix_core.calib.drone_calibrator import FAILED, OK, DroneCalibrator
 from matrix_core.datasets import DatasetError, MatrixDataset
 from matrix_core.geometry.camera import check_intrinsics
+from matrix_core.site.calib_scene import site_calib_scene
+from matrix_core.site.parameter import named_site
 from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
 from matrix_ros import diagnostics
 from matrix_ros.connect import SubscribeWhenConnected
@@ -46,7 +48,8 @@ class CalibNode(SettingsNode):
         self.settings = s = declare_settings(self, CalibNodeSettings, defaults, shared=self.link.parameters)
         s.apply_threads()
         self.own_thread = self.link.own_thread(self, s.thread_niceness)  # then spin_nodes spins it on its own thread
-        self.scene = load_scene(s.config)
+        # no config: the boards (and the shared camera) of the site; for MATRIX the shipped real-sample scene
+        self.scene = load_scene(s.config) if s.config else site_calib_scene(named_site(s.site))
         reference = MatrixDataset(s.prior_dataset) if s.prior_dataset else None
         self.calibrators, self.pubs, self.syncs, self.connections = {}, {}, {}, {}
         self.diag_pub = self.create_publisher(diagnostics.DiagnosticArray, topics.DIAGNOSTICS_TOPIC, publisher_qos())
