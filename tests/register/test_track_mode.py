@@ -162,7 +162,7 @@ def test_the_refinement_repeats_until_a_poor_prediction_converges(dataset, monke
     off = np.array([[1.0, 0, 7], [0, 1, -3], [0, 0, 1]])
     errors = {}
     for refine_scale in (TRACK.scale, TRACK.track_refine_scale):
-        tracker = FlowTracker(TRACK.scale, TRACK.track_corners, TRACK.ransac_threshold_px, refine_scale=refine_scale)
+        tracker = FlowTracker(TRACK.scale, TRACK.flow_corners, TRACK.homography_ransac_px, refine_scale=refine_scale)
         reference = tracker.anchor(
             tracker.reduce(dataset.reference_image('D6')),
             ref,
@@ -189,7 +189,7 @@ def test_the_flow_step_tracks_forward_only(dataset):
     check, more corners kept."""
     from matrix_core.register import flow_tracking as ft
 
-    tracker = FlowTracker(TRACK.scale, TRACK.track_corners, TRACK.ransac_threshold_px)
+    tracker = FlowTracker(TRACK.scale, TRACK.flow_corners, TRACK.homography_ransac_px)
     a, b = (tracker.reduce(dataset.load_image('D6', f)).flow for f in dataset.frames[:2])
     corners = cv2.goodFeaturesToTrack(a, 500, ft.CORNER_QUALITY, ft.CORNER_MIN_DISTANCE)
     both, checked = ft._track(a, b, corners, None, ft.FLOW_WINDOW, ft.FLOW_LEVELS)

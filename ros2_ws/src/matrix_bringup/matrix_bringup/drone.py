@@ -20,8 +20,13 @@ from matrix_ros.drone_link import DroneLink
 from matrix_ros.params import spin_nodes
 
 
+# The settings of the nodes this process hosts: one parameter set is given to all of them, so a name they
+# share must mean the same in each (test_process_settings.py checks type, default and help).
+HOSTED_SETTINGS = (RegisterNodeSettings, CalibNodeSettings)
+
+
 def main(argv=None) -> int:
-    link = DroneLink([name for cls in (CalibNodeSettings, RegisterNodeSettings) for name, *_ in settings_fields(cls)])
+    link = DroneLink([name for cls in HOSTED_SETTINGS for name, *_ in settings_fields(cls)])
     # register first: calib connects to the link before any image can arrive (nothing spins until both exist)
     nodes = [lambda: RegisterNode(RegisterNodeSettings(), link), lambda: CalibNode(CalibNodeSettings(), link)]
     return spin_nodes(nodes, argv, description=__doc__)

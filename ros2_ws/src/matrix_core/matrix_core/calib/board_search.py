@@ -140,7 +140,7 @@ def search_boards(
         why = '; '.join(sorted(set(reasons))) or 'no board piece found'
         outcome.message = f'{len(world)} corners assigned (< {s.min_corners}): {why}'
         return outcome
-    fit = solve_pnp(np.array(world), np.array(uv), scene.camera(np.eye(4)), s.ransac_threshold_px)
+    fit = solve_pnp(np.array(world), np.array(uv), scene.camera(np.eye(4)), s.pnp_ransac_px)
     timings['pnp'] = time.perf_counter() - t
     if fit is None:
         outcome.message = 'PnP failed'

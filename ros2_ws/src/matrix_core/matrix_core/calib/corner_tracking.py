@@ -32,7 +32,7 @@ def predicted_camera(scene: CalibScene, settings: CalibSettings, predicted: dict
     world, uv = np.concatenate(world), np.concatenate(uv)
     if len(world) < settings.min_corners:
         return None
-    fit = solve_pnp(world, uv, scene.camera(np.eye(4)), settings.ransac_threshold_px)
+    fit = solve_pnp(world, uv, scene.camera(np.eye(4)), settings.pnp_ransac_px)
     return None if fit is None else fit.camera
 
 

@@ -165,7 +165,7 @@ class DroneCalibrator:
         restarted, self.went_back = self.went_back, False
         # Every RANSAC below draws from OpenCV's global RNG: seeding it per image makes the result depend on
         # this image and this drone's history only, not on other drones sharing the process.
-        cv2.setRNGSeed(self.settings.seed)
+        cv2.setRNGSeed(self.settings.calib_seed)
         gray = _gray(image)
         width, height = self.scene.image_size
         if gray.shape[:2] != (height, width):

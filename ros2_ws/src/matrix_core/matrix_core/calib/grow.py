@@ -227,7 +227,7 @@ def grow_pose(
     total, previous = (0, 0), camera
     for round_ in range(rounds):
         world, uv = corrected_correspondences(maps, correction)
-        fit = solve_pnp(world, uv, scene.camera(np.eye(4)), settings.ransac_threshold_px)
+        fit = solve_pnp(world, uv, scene.camera(np.eye(4)), settings.pnp_ransac_px)
         if fit is None:
             return None, correction
         total = (total[0] + correction[0], total[1] + correction[1])

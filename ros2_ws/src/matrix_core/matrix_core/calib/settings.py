@@ -164,7 +164,7 @@ class CalibSettings(RestartSettings):
         default=35.0,
         metadata={'help': 'orientation hypotheses whose rotation differs from the prior by more than this are dropped'},
     )
-    ransac_threshold_px: float = field(default=2.0, metadata={'help': 'PnP RANSAC inlier threshold, pixels'})
+    pnp_ransac_px: float = field(default=2.0, metadata={'help': 'PnP RANSAC inlier threshold, pixels'})
     max_reprojection_px: float = field(
         default=0.8, metadata={'help': 'a pose whose RMS reprojection error exceeds this is rejected (status stale)'}
     )
@@ -184,7 +184,7 @@ class CalibSettings(RestartSettings):
     initial_prior_jump_deg: float = field(
         default=45.0, metadata={'help': 'rotation jump limit while the prior is still the configured/reference pose'}
     )
-    seed: int = field(
+    calib_seed: int = field(
         default=0,
         metadata={
             'help': "seed of OpenCV's RNG (the RANSAC steps), set before every image: reproducible results, the "
@@ -214,7 +214,7 @@ class CalibSettings(RestartSettings):
             raise ValueError('ambiguity_ratio must be in (0, 1)')
         for name in (
             'registration_agreement_m',
-            'ransac_threshold_px',
+            'pnp_ransac_px',
             'max_reprojection_px',
             'max_jump_m',
             'max_jump_deg',

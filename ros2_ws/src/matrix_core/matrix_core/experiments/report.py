@@ -385,8 +385,8 @@ class Report:
             f'As the paper measures it: mean and standard deviation over {len(ransac)} runs that vary '
             f'{paper.RUNS_VARY} (paper: {paper.RUNS} runs, {paper.BASELINES_NOTE}). The same trained model '
             f'(`{self.main}`) is tested with the homographies of {len(ransac)} registration runs of the complex '
-            'test sequence with the paper\'s plain RANSAC (`matrix-tracker register --estimator ransac --seed '
-            'K`), each seed its own samples. Percent; standard deviation over runs (n - 1).',
+            'test sequence with the paper\'s plain RANSAC (`matrix-tracker register --estimator ransac '
+            '--registration_seed K`), each seed its own samples. Percent; standard deviation over runs (n - 1).',
             a,
             'For reference, the live default, MAGSAC (`estimator: magsac`), chosen because it is deterministic '
             '(every replay of a recording gives the same homographies) and the more accurate with few or noisy '

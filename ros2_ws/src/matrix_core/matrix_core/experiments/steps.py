@@ -112,7 +112,7 @@ def run_register(p: dict, out: Path, run_dir: Path, progress: bool, log) -> None
             f'{scale:g}',
             '--estimator',
             p.get('estimator', 'magsac'),
-            '--seed',
+            '--registration_seed',
             str(p.get('seed', 0)),
         ],
         out,

@@ -29,7 +29,7 @@ def settings_for_width(settings: RegisterSettings, width: int) -> RegisterSettin
         settings,
         scale=min(1.0, settings.scale * factor),
         track_refine_scale=min(1.0, settings.track_refine_scale * factor),
-        ransac_threshold_px=settings.ransac_threshold_px / factor,
+        homography_ransac_px=settings.homography_ransac_px / factor,
     )
 
 

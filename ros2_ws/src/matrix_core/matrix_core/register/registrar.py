@@ -79,7 +79,7 @@ class Registrar:
         self._frames_on_key = 0  # frames registered since the last re-keying
         self._last_good = None  # (frame_id, features, ref_H_img)
         self.tracker = FlowTracker(
-            s.scale, s.track_corners, s.ransac_threshold_px, s.estimator, s.seed, s.track_refine_scale
+            s.scale, s.flow_corners, s.homography_ransac_px, s.estimator, s.registration_seed, s.track_refine_scale
         )
         self._track = None  # the FlowStart of the last registered frame (mode track), None: next one anchors
         # mode track, anchor_by_flow: the reference as a chain's anchor (its reduced images and ground corners)
@@ -347,7 +347,7 @@ class Registrar:
         """Match ``cur`` to ``target`` (whose pixels map to the reference's by ``target_to_ref``), fit, gate."""
         s = self.settings
         cam = self.reference.camera
-        cv2.setRNGSeed(s.seed)  # OpenCV's global RNG, seeded per registration: the same frames, the same fit
+        cv2.setRNGSeed(s.registration_seed)  # OpenCV's global RNG, per registration: same frames, same fit
         pairs = match_symmetric(cur.desc, target.desc, s.ratio, s.matcher)
         # Fit in reference pixels, so that the inlier threshold is in full-resolution reference pixels.
         dst = (
@@ -356,7 +356,7 @@ class Registrar:
             else np.zeros((0, 2))
         )
         fit = fit_homography(
-            cur.xy[pairs[:, 0]], dst, s.estimator, s.ransac_threshold_px, s.ransac_iterations, seed=s.seed
+            cur.xy[pairs[:, 0]], dst, s.estimator, s.homography_ransac_px, s.ransac_iterations, seed=s.registration_seed
         )
         matches, inliers = len(pairs), int(fit.inliers.sum())
         args = (matches, inliers, fit.error_px, start)

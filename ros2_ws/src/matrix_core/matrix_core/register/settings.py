@@ -51,11 +51,11 @@ class RegisterSettings(RestartSettings):
         metadata={
             'help': "robust homography estimator: magsac (default: OpenCV's USAC_MAGSAC, deterministic and the more "
             "accurate with few or noisy matches, so the live graph gives the same homographies on every "
-            "replay) or ransac (the MATRIX paper's plain RANSAC, seeded by `seed`; its run-to-run variation "
-            "is what the paper's 10 runs measure)"
+            "replay) or ransac (the MATRIX paper's plain RANSAC, seeded by `registration_seed`; its run-to-run "
+            "variation is what the paper's 10 runs measure)"
         },
     )
-    ransac_threshold_px: float = field(
+    homography_ransac_px: float = field(
         default=3.0, metadata={'help': 'inlier threshold in FULL-resolution pixels of the reference image'}
     )
     ransac_iterations: int = field(default=5000, metadata={'help': 'maximum robust-estimator iterations'})
@@ -150,7 +150,7 @@ class RegisterSettings(RestartSettings):
             'first frame, after failures and when the chain is doubted)'
         },
     )
-    track_corners: int = field(
+    flow_corners: int = field(
         default=2000,
         metadata={'help': 'mode track: corners detected on each anchor at the reduced scale, before the ground mask'},
     )
@@ -186,7 +186,7 @@ class RegisterSettings(RestartSettings):
             'image when that fails; 0 = always the whole image; register/search_region.py)'
         },
     )
-    seed: int = field(
+    registration_seed: int = field(
         default=0,
         metadata={
             'help': 'random seed of the ransac estimator: the same seed repeats its homographies, other seeds '
@@ -221,12 +221,12 @@ class RegisterSettings(RestartSettings):
             'reference_max_features',
             'min_inliers',
             'ransac_iterations',
-            'track_corners',
+            'flow_corners',
             'track_min_inliers',
         ):
             if getattr(self, name) < 4:
                 raise ValueError(f'{name} must be at least 4')
         if self.anchor_search_margin_px < 0:
             raise ValueError(f'anchor_search_margin_px must be >= 0, got {self.anchor_search_margin_px}')
-        if self.ransac_threshold_px <= 0 or self.gate_max_area_ratio <= 1.0:
-            raise ValueError('ransac_threshold_px must be > 0 and gate_max_area_ratio > 1')
+        if self.homography_ransac_px <= 0 or self.gate_max_area_ratio <= 1.0:
+            raise ValueError('homography_ransac_px must be > 0 and gate_max_area_ratio > 1')
