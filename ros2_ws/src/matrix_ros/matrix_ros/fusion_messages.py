@@ -9,6 +9,7 @@ from nav_msgs.msg import OccupancyGrid
 from sensor_msgs.msg import CompressedImage
 from visualization_msgs.msg import Marker, MarkerArray
 
+from matrix_core.live_scene import track_rgb
 from matrix_ros import diagnostics
 
 PERSON_HEIGHT_M, PERSON_DIAMETER_M = 1.8, 0.5  # the RViz cylinder of a track
@@ -78,8 +79,7 @@ def markers_msg(header, tracks) -> MarkerArray:
         body.pose.orientation.w = 1.0
         body.scale.x = body.scale.y = PERSON_DIAMETER_M
         body.scale.z = PERSON_HEIGHT_M
-        hue = (t.track_id * 0.618034) % 1.0  # distinct, stable colour per id
-        body.color.r, body.color.g, body.color.b, body.color.a = hue, 1.0 - hue, 0.5, 0.8
+        (body.color.r, body.color.g, body.color.b), body.color.a = track_rgb(t.track_id), 0.8
         text = Marker(
             header=header,
             ns='track_ids',
