@@ -7,7 +7,9 @@ whose implied camera predicts the boards (else the image motion does). With regi
 (``matrix_ros.drone_link``; calib on its own thread) both come from register, the image decoded once. Publishes
 ``V/camera_info`` (``p = K [R | t]``), ``V/pose`` (also on ``/tf``: world -> the image's optical frame), a
 ``calib/V`` status per image on ``/diagnostics``, stamped as the image (stale: the last good pose,
-``publish_stale``); bad input is reported, the node keeps running.
+``publish_stale``); bad input is reported, the node keeps running. A drone whose ``prior_dataset`` reference
+cannot be read is left out at start, logged and reported (``calib/V/start_up``, ``matrix_ros.left_out``); the
+others are served, and the node exits when none is left.
 """
 
 import time
@@ -25,6 +27,7 @@ from matrix_core.calib.prior import initial_prior
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.drone_calibrator import FAILED, OK, DroneCalibrator
 from matrix_core.datasets import DatasetError, MatrixDataset
+from matrix_core.datasets.drone_inputs import unreadable_drones
 from matrix_core.geometry.camera import check_intrinsics
 from matrix_core.site.calib_scene import site_calib_scene
 from matrix_core.site.parameter import named_site
@@ -34,6 +37,7 @@ from matrix_ros.connect import SubscribeWhenConnected
 from matrix_core.message_fields import ConversionError, image_from_msg, registration_from_msg, stamp_seconds
 from matrix_ros.conversions import camera_to_camera_info, camera_to_pose
 from matrix_ros.drone_link import DroneLink
+from matrix_ros.left_out import LeftOutReport, served_drones
 from matrix_ros.node_settings import hosted_drones
 from matrix_ros.params import SettingsNode, declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
@@ -54,7 +58,10 @@ class CalibNode(SettingsNode):
         self.calibrators, self.pubs, self.syncs, self.connections = {}, {}, {}, {}
         self.diag_pub = self.create_publisher(diagnostics.DiagnosticArray, topics.DIAGNOSTICS_TOPIC, publisher_qos())
         self.tf_pub = self.create_publisher(TFMessage, topics.TF_TOPIC, publisher_qos('reliable', 100))
-        for view, prefix in hosted_drones(self, s.views):
+        hosted = hosted_drones(self, s.views)
+        # a drone whose reference prior cannot be read is left out and reported; the others are served
+        left_out = unreadable_drones(reference, [v for v, _ in hosted]) if reference and reference.has_reference else {}
+        for view, prefix in served_drones(self, hosted, left_out):
             self.calibrators[view] = DroneCalibrator(self.scene, s, *self._prior(view, reference))
             self.pubs[view] = (
                 self.create_publisher(CameraInfo, topics.drone_topic(prefix, topics.CAMERA_INFO), publisher_qos()),
@@ -68,6 +75,7 @@ class CalibNode(SettingsNode):
                     10,
                 )
             self._subscribe(view, prefix)
+        self.left_out = LeftOutReport(self, left_out, self.diag_pub)
         if s.use_registration:  # waits on the wall clock (sim time stops in lockstep), checked to 5 % of their length
             period = min(1.0, max(0.05, s.registration_wait_s / 20))  # (20 Hz cost an idle node 3.6 % of a core)
             self.create_timer(period, self._poll, clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -122,6 +130,8 @@ class CalibNode(SettingsNode):
             self.get_logger().error(f'{view}: CameraInfo intrinsics ignored: {exc}')
 
     def _on_image(self, view: str, msg, image=None, received=None):
+        if view not in self.calibrators:  # register of this process serves a drone this node left out
+            return
         item = (msg, received or time.perf_counter(), image)  # image: decoded by register in this process, else None
         if view not in self.syncs:
             return self._calibrate(view, *item)

@@ -10,7 +10,9 @@ Per view ``V`` in ``views`` (several drones per process), relative topics (``mat
 
 Reference: ``reference_dataset``'s ``reference/`` image and calibration of ``V`` (its
 ``matrix_tracker_meta.json`` also gives the obstacles, see ``matrix_core.register.scene``), or else the first
-image whose CameraInfo (``p = K [R | t]``) has the SAME stamp (``matrix_core.register.reference_pairing``).
+image whose CameraInfo (``p = K [R | t]``) has the SAME stamp (``matrix_core.register.reference_pairing``). A
+drone whose reference cannot be read is left out at start, logged and reported on ``/diagnostics``
+(``register/V/start_up``, ``matrix_ros.left_out``); the others are served, and the node exits when none is left.
 Failed and undecodable frames are published failed with their reason (never a made-up homography), so that the
 fuse node need not wait for them. In one process with calib (``matrix_ros.drone_link``) each image is decoded
 once, grey, and handed to calib with its registration. A reference dataset's first drone warms the process up.
@@ -21,6 +23,7 @@ from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
 from matrix_core import topics
 from matrix_core.datasets import MatrixDataset
+from matrix_core.datasets.drone_inputs import unreadable_drones
 from matrix_core.register.backends import make_backend
 from matrix_core.register.reference_pairing import FAIL, HOLD, REFERENCE, ReferencePairing, stamp_text
 from matrix_core.register.registrar import Registrar
@@ -33,6 +36,7 @@ from matrix_ros.connect import SubscribeWhenConnected
 from matrix_core.message_fields import ConversionError, camera_from_camera_info, stamp_ns
 from matrix_ros.conversions import registration_to_msg
 from matrix_ros.drone_link import DroneLink
+from matrix_ros.left_out import LeftOutReport, served_drones
 from matrix_ros.node_settings import hosted_drones
 from matrix_ros.params import SettingsNode, declare_settings, spin_node
 from matrix_ros.qos import publisher_qos, qos_by_name
@@ -56,15 +60,19 @@ class RegisterNode(SettingsNode):
             s = self.settings
             if note:
                 self.get_logger().info(note)
-        for view, prefix in hosted_drones(self, s.views):
+        hosted = hosted_drones(self, s.views)
+        # a drone whose reference cannot be read is left out and reported; the others are served
+        left_out = unreadable_drones(dataset, [v for v, _ in hosted]) if dataset is not None else {}
+        for view, prefix in served_drones(self, hosted, left_out):
             self._start_drone(view)
             self._subscribe_view(view, prefix, needs_camera_info=dataset is None)
             self.pubs[view] = self.create_publisher(
                 HomographyStamped, topics.drone_topic(prefix, topics.HOMOGRAPHY), publisher_qos()
             )
         self.diag_pub = self.create_publisher(diagnostics.DiagnosticArray, topics.DIAGNOSTICS_TOPIC, publisher_qos())
+        self.left_out = LeftOutReport(self, left_out, self.diag_pub)
         self.get_logger().info(
-            f'registering {s.views} with backend {self.backend.name} at scale {s.scale}; '
+            f'registering {list(self.pubs)} with backend {self.backend.name} at scale {s.scale}; '
             f'reference: {s.reference_dataset or "first frame with CameraInfo"}'
         )
 

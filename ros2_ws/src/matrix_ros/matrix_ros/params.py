@@ -23,6 +23,7 @@ from rclpy.utilities import remove_ros_args
 
 from matrix_core.settings import add_settings_arguments, settings_fields, settings_from_namespace
 from matrix_ros.executor import make_executor
+from matrix_ros.left_out import NoDroneCanStart
 from matrix_ros.site_parameter import check_site_views, site_defaults
 
 
@@ -215,6 +216,9 @@ def _spin(node_factories, argv, on_exit=None) -> int:
                 threads.append(_spin_in_thread(nodes[-1], own, stop))
         while not stop and rclpy.ok():
             executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
+    except NoDroneCanStart as exc:  # bad input, not a bug: one line naming the drones, no traceback
+        print(f'error: {exc}', file=sys.stderr)
+        return 2
     finally:
         stop.append(True)
         for thread in threads:
