@@ -3,7 +3,8 @@ launch of a ROS install, or those scripts/build_cli.sh builds here), as the READ
 
 - full_graph.launch.py replays a bag of the real sample through the whole graph and ends by itself: exit 0,
   the recorder's bag closed and scored for every frame, every process stopped; non-zero with the reason on
-  a lockstep timeout or a node that died, and on bad arguments before any process starts;
+  a lockstep timeout or a node that died, and on bad arguments before any process starts; a drone whose
+  reference cannot be read is left out, the others replayed, and the launch exits 1 naming it;
 - dataset_player.launch.py, calib.launch.py and register.launch.py together on the real sample: one drone's
   images, camera_info and homography arrive, with the launch arguments as the nodes' parameters.
 """
@@ -122,6 +123,38 @@ def test_full_graph_exits_non_zero_on_a_lockstep_timeout_or_a_dead_node(small_ba
     started, ended = _started_and_stopped(run.stdout)
     assert started and started == ended, (started, ended)  # every node stopped all the same
     assert f'closed {tmp_path / "rec"}:' in run.stdout  # and the recording closed
+
+
+@pytest.mark.slow
+def test_full_graph_without_a_drone_whose_reference_is_unreadable(small_bag, tmp_path):
+    """D2's reference image is two bytes of text: the launch leaves D2 out before anything starts, replays the
+    bag through D1, fuse and the recorder, names D2 in its ``replay done:`` line and exits 1 (run_graph: 5)."""
+    import shutil
+
+    data = tmp_path / 'sim'
+    shutil.copytree(small_bag, data, copy_function=os.symlink, ignore=shutil.ignore_patterns('bag'))
+    (reference,) = (data / 'reference' / 'image_subsets' / 'D2').glob('0000.*')
+    reference.unlink()
+    reference.write_text('x\n')
+    run = _launch_graph(
+        f'bag:={small_bag / "bag"}',
+        f'dataset:={data}',
+        'views:=[D1,D2]',
+        'drones_per_process:=0',
+        f'record:={tmp_path / "rec"}',
+        timeout_s=300,
+    )
+    out = run.stdout
+    assert run.returncode == 1, out[-6000:]
+    done = [line for line in out.splitlines() if 'replay done: ' in line]
+    assert len(done) == 1 and 'the bag was played' in done[0], out[-6000:]
+    assert f'ran without drone(s) D2: D2 left out (reference: cannot decode image {reference}' in done[0], done
+    assert 'Caught exception in launch' in out and out.count('ran without drone(s) D2: ') == 2, out[-6000:]
+    assert 'Traceback' not in out
+    started, ended = _started_and_stopped(out)
+    assert len(started) == 4 and started == ended, (started, ended)  # D1's drone, fuse, recorder, player
+    assert f'closed {tmp_path / "rec"}:' in out  # the recording of D1's frames closed
+    assert (tmp_path / 'rec.tracks.txt').read_text().startswith('0 ')
 
 
 @pytest.mark.slow

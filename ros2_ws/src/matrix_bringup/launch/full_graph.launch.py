@@ -29,7 +29,8 @@ EXIT_AT_END = DeclareLaunchArgument(
     description=(
         'true: once the player has played the bag and the last frame is processed (and the monitor, if any, has '
         'written its scores) every node is stopped and the launch exits: 0, or 1 when lockstep timed out for '
-        'some frame or a node died; false: the nodes keep running after the replay'
+        'some frame, a node died or a drone was left out at start (its reference unreadable; the others ran); '
+        'false: the nodes keep running after the replay'
     ),
 )
 
@@ -64,7 +65,7 @@ def _graph(context):
             player=specs[-1].label,
             monitor=monitor,
             monitor_timeout_s=settings.lockstep_timeout,
-            left_out=left_out_text(left_out),
+            left_out=left_out,
         ).handlers()
     return actions + list(nodes.values())
 

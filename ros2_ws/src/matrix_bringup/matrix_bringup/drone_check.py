@@ -7,9 +7,10 @@ from dataclasses import replace
 from matrix_core.datasets import DatasetError, MatrixDataset
 from matrix_core.datasets.drone_inputs import left_out_text, unreadable_drones
 
-__all__ = ['LEFT_OUT_EXIT', 'left_out_text', 'without_unreadable_drones']
+__all__ = ['LEFT_OUT_EXIT', 'left_out_text', 'ran_without_text', 'without_unreadable_drones']
 
 LEFT_OUT_EXIT = 5  # run_graph's exit code when every frame played but some drone was left out at start
+# (``ros2 launch`` has one failure code, 1: the launch exits with it, saying the same line)
 
 
 def without_unreadable_drones(settings) -> tuple:
@@ -28,3 +29,8 @@ def without_unreadable_drones(settings) -> tuple:
     if not kept:
         raise ValueError(f'no drone can start: {left_out_text(left_out)}')
     return replace(settings, views=kept), left_out
+
+
+def ran_without_text(left_out: dict) -> str:
+    """The end of a replay that ran without some drones: 'ran without drone(s) D2: D2 left out (why)'."""
+    return f'ran without drone(s) {", ".join(sorted(left_out))}: {left_out_text(left_out)}'

@@ -3,8 +3,10 @@
 Once the player has played the whole bag (and the monitor, if any, has written its scores) every node is
 stopped (SIGINT: the recorder closes its bag) and ``ros2 launch`` exits 0. It exits non-zero, saying why,
 when the player's lockstep timed out for some frame (player code 3), nothing was played, the monitor could
-score nothing, or another node died before the end. ``launch`` has a single failure code (1: an error
-raised in an event handler shuts the launch down), so the reason is in the message, not in the code.
+score nothing, another node died before the end, or some drone was left out at start (``drone_check``; the
+replay ran, and its ``replay done:`` line names the drone). ``launch`` has a single failure code (1: an error
+raised in an event handler shuts the launch down, stopping every node as a Shutdown event does), so the
+reason is in the message, not in the code: where ``run_graph`` exits 4 or 5, the launch exits 1.
 
 Imported only by ``full_graph.launch.py`` (it needs the ``launch`` package; ``graph`` and ``run_graph``
 do not).
@@ -14,6 +16,7 @@ from launch.actions import EmitEvent, LogInfo, OpaqueFunction, RegisterEventHand
 from launch.event_handlers import OnProcessExit
 from launch.events import Shutdown
 
+from matrix_bringup.drone_check import ran_without_text
 from matrix_bringup.graph import player_exit_text
 
 # Without a monitor the player exits once the fuse node published the last frame's tracks; the recorder
@@ -29,12 +32,13 @@ class ReplayEnd:
     """Event handlers that end the launch after the replay. ``actions``: the launch_ros ``Node`` actions,
     by label ('fuse', 'D3/calib', ...); ``player`` and ``monitor`` (or None) are labels among them;
     ``monitor_timeout_s``: how long the monitor may take to score after the last frame; ``left_out``: the
-    drones left out at start and why (``drone_check.left_out_text``), said again when the replay ends."""
+    drones left out at start, view -> why (``drone_check.without_unreadable_drones``): said again when the
+    replay ends, and the launch then fails."""
 
     def __init__(
-        self, actions: dict, player: str, monitor: str = None, monitor_timeout_s: float = 120.0, left_out: str = ''
+        self, actions: dict, player: str, monitor: str = None, monitor_timeout_s: float = 120.0, left_out: dict = None
     ):
-        self.actions, self.player, self.monitor, self.left_out = actions, player, monitor, left_out
+        self.actions, self.player, self.monitor, self.left_out = actions, player, monitor, dict(left_out or {})
         self.monitor_timeout_s = monitor_timeout_s
         self.exited = {}  # label -> exit code, of the player and the monitor
         self.ending = False  # once true, processes exit because the launch stops them
@@ -89,6 +93,14 @@ class ReplayEnd:
         if self.ending:
             return []
         self.ending = True
-        if self.left_out:
-            reason += f'; ran without: {self.left_out}'
-        return [LogInfo(msg=f'replay done: {reason}; stopping every node'), EmitEvent(event=Shutdown(reason=reason))]
+        if not self.left_out:
+            return [
+                LogInfo(msg=f'replay done: {reason}; stopping every node'),
+                EmitEvent(event=Shutdown(reason=reason)),
+            ]
+        reason += f'; {ran_without_text(self.left_out)}'
+        return [LogInfo(msg=f'replay done: {reason}; stopping every node'), OpaqueFunction(function=self._left_out)]
+
+    def _left_out(self, context):
+        """Every frame was played, without some drones: exit 1 (the launch's failure code) naming them."""
+        raise ReplayFailed(ran_without_text(self.left_out))

@@ -25,7 +25,7 @@ import sys
 import time
 from pathlib import Path
 
-from matrix_bringup.drone_check import LEFT_OUT_EXIT, left_out_text, without_unreadable_drones
+from matrix_bringup.drone_check import LEFT_OUT_EXIT, left_out_text, ran_without_text, without_unreadable_drones
 from matrix_bringup.graph import GraphSettings, NodeSpec, graph_nodes, player_exit_text
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
@@ -150,7 +150,7 @@ def run(settings: GraphSettings, log_dir: Path, stop_timeout: float = 10.0, echo
     code = graph.procs[player].returncode
     echo(f'run_graph: player exited with {code}{player_exit_text(code)}')
     if left_out:
-        echo(f'run_graph: ran without drone(s) {", ".join(sorted(left_out))}: {left_out_text(left_out)}')
+        echo(f'run_graph: {ran_without_text(left_out)}')
         return LEFT_OUT_EXIT if code == 0 else code
     return code
 
