@@ -14,6 +14,7 @@ source scripts/env.sh
 [ $# -ge 1 ] || { echo "usage: $0 SEED [SEED ...]" >&2; exit 2; }
 ckpt=ros2_ws/src/matrix_core/matrix_core/bev/checkpoints
 config=${CONFIG:-detector}
+mkdir -p out/train   # the seeds' logs go beside their run folders, which train creates itself
 pids=()
 for seed in "$@"; do
   out="out/train/${config}_seed$seed"
