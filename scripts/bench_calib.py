@@ -23,7 +23,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from matrix_core.calib.drone_calibrator import OK, DroneCalibrator
+from matrix_core.calib.drone_calibrator import DroneCalibrator
+from matrix_core.calib.status import CalibStatus
 from matrix_core.calib.evaluation import pose_errors
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
@@ -54,7 +55,7 @@ def bench(dataset, scale, repeat, settings):
                 tracked += r.tracked
                 for stage, seconds in r.timings_s.items():
                     stages.setdefault(stage, []).append(seconds * 1000)
-                if r.status == OK:
+                if r.status is CalibStatus.OK:
                     e = pose_errors(r.camera, dataset.camera(view, frame))
                     rot.append(e[0])
                     ctr.append(e[1])
@@ -62,8 +63,8 @@ def bench(dataset, scale, repeat, settings):
     size = f'{scene.image_size[0]}x{scene.image_size[1]}'
     line = (
         f'{size}: {len(t)} frames, time per frame median {np.median(t):.0f} ms, '
-        f'p95 {np.percentile(t, 95):.0f} ms, max {t.max():.0f} ms; ok {statuses.count(OK)}, '
-        f'stale {statuses.count("stale")}, failed {statuses.count("failed")}, tracked {tracked} '
+        f'p95 {np.percentile(t, 95):.0f} ms, max {t.max():.0f} ms; ok {statuses.count(CalibStatus.OK)}, '
+        f'stale {statuses.count(CalibStatus.STALE)}, failed {statuses.count(CalibStatus.FAILED)}, tracked {tracked} '
         f'(stage medians: ' + ', '.join(f'{k} {np.median(v):.0f} ms' for k, v in stages.items() if k != 'total') + ')'
     )
     if rot:

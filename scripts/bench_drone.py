@@ -31,7 +31,8 @@ from threadpoolctl import threadpool_limits
 import numpy as np
 from tqdm import tqdm
 
-from matrix_core.calib.drone_calibrator import OK, DroneCalibrator
+from matrix_core.calib.drone_calibrator import DroneCalibrator
+from matrix_core.calib.status import CalibStatus
 from matrix_core.calib.scene import config_for_dataset, load_scene
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.cli.calibrate import simulated_sequence
@@ -78,10 +79,10 @@ def bench(
                 t = time.process_time()
                 c = calibrator.process(image, PERIOD_S * index, guide)
                 calib_ms.append(1000 * (time.process_time() - t))
-                if c.status == OK:
+                if c.status is CalibStatus.OK:
                     rot.append(rotation_angle_deg(c.camera.R, dataset.camera(view, frame).R))
                     centre.append(float(np.linalg.norm(c.camera.center - dataset.camera(view, frame).center)))
-                ok, tracked, registered = ok + (c.status == OK), tracked + c.tracked, registered + r.ok
+                ok, tracked, registered = ok + (c.status is CalibStatus.OK), tracked + c.tracked, registered + r.ok
                 bar.update()
     calib_ms, register_ms, first = np.array(calib_ms), np.array(register_ms), np.array(first)
     both = calib_ms + register_ms

@@ -9,7 +9,8 @@ import pytest
 from matrix_core.calib.assignment import assign_piece, correlate_valid
 from matrix_core.calib.corner_tracking import track_corners
 from matrix_core.calib.detection import find_pieces
-from matrix_core.calib.drone_calibrator import FAILED, OK, STALE, DroneCalibrator
+from matrix_core.calib.drone_calibrator import DroneCalibrator
+from matrix_core.calib.status import CalibStatus
 from matrix_core.calib.evaluation import pose_errors
 from matrix_core.calib.grow import MAX_MOVE_SQUARES, best_correction, saddle_map
 from matrix_core.calib.motion import GroundMotion
@@ -187,7 +188,7 @@ def test_tracker_follows_drone_5(dataset, scene):
     cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera('D5'), dataset.reference_image('D5'))
     for index, frame in enumerate(dataset.frames):
         r = cal.process(dataset.load_image('D5', frame), 0.5 * index)
-        assert r.status == OK, r.message
+        assert r.status == CalibStatus.OK, r.message
         rot, centre = pose_errors(r.camera, dataset.camera('D5', frame))
         assert rot < 0.2 and centre < 0.1, (frame, rot, centre)
         assert r.corners >= 100 and r.rms_px < 1.0
@@ -196,13 +197,13 @@ def test_tracker_follows_drone_5(dataset, scene):
 def test_stale_keeps_last_good_pose_and_failed_has_none(dataset, scene):
     cal = DroneCalibrator(scene, CalibSettings(full_search=False), dataset.camera('D5', 0))
     good = cal.process(dataset.load_image('D5', 0), 10.0)
-    assert good.status == OK
+    assert good.status == CalibStatus.OK
     blank = np.full((1080, 1920, 3), 128, np.uint8)
     r = cal.process(blank, 10.5)
-    assert r.status == STALE and r.camera is good.camera and r.age_s == pytest.approx(0.5)
+    assert r.status == CalibStatus.STALE and r.camera is good.camera and r.age_s == pytest.approx(0.5)
     assert np.all(np.isfinite(r.camera.cam_T_world))
     none = DroneCalibrator(scene, CalibSettings(full_search=False), None).process(blank, 0.0)
-    assert none.status == FAILED and none.camera is None
+    assert none.status == CalibStatus.FAILED and none.camera is None
     with pytest.raises(ValueError):
         cal.process(np.zeros((0, 0, 3), np.uint8), 11.0)
     with pytest.raises(ValueError):
@@ -236,7 +237,7 @@ def test_acceptance_real_sample_all_drones(dataset, scene):
         cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view), dataset.reference_image(view))
         for index, frame in enumerate(dataset.frames):
             r = cal.process(dataset.load_image(view, frame), 0.5 * index)
-            if r.status == OK:
+            if r.status == CalibStatus.OK:
                 e = pose_errors(r.camera, dataset.camera(view, frame))
                 rot.append(e[0])
                 centre.append(e[1])
@@ -257,7 +258,7 @@ def test_results_do_not_depend_on_other_drones_in_the_process(dataset, scene):
         a = alone.process(dataset.load_image('D4', frame), frame)
         other.process(dataset.load_image('D1', frame), frame)
         b = shared.process(dataset.load_image('D4', frame), frame)
-        assert a.status == b.status == OK
+        assert a.status == b.status == CalibStatus.OK
         np.testing.assert_array_equal(a.camera.cam_T_world, b.camera.cam_T_world)
 
 
@@ -274,7 +275,7 @@ def test_tracked_frames_skip_the_search_and_agree_with_it(dataset, scene):
     for index, frame in enumerate(dataset.frames):
         image = dataset.load_image(view, frame)
         a, b = tracked.process(image, 0.5 * index), searched.process(image, 0.5 * index)
-        assert a.status == b.status == OK, (frame, a.message, b.message)
+        assert a.status == b.status == CalibStatus.OK, (frame, a.message, b.message)
         assert a.tracked == (index in (1, 2, 4)) and not b.tracked
         assert ('detect' in a.timings_s) == (not a.tracked)  # tracked frames ran no search
         assert a.corners > 0.9 * b.corners  # the rounds of grow verify as many corners as the search finds
@@ -294,14 +295,14 @@ def test_hidden_boards_are_not_tracked(dataset, scene):
         dataset.reference_camera(view),
         dataset.reference_image(view),
     )
-    assert cal.process(dataset.load_image(view, 0), 0.0).status == OK
+    assert cal.process(dataset.load_image(view, 0), 0.0).status == CalibStatus.OK
     image = dataset.load_image(view, 1)
     truth = scene.camera(dataset.camera(view, 1).cam_T_world)
     for board in scene.boards:
         outline = truth.project(outline_world(board, margin_cells=2.0))
         cv2.fillConvexPoly(image, np.round(outline).astype(np.int32), (128, 128, 128))
     r = cal.process(image, 0.5)
-    assert r.status == STALE and not r.tracked and 'detect' in r.timings_s
+    assert r.status == CalibStatus.STALE and not r.tracked and 'detect' in r.timings_s
     assert r.motion.startswith('homography (')
     assert r.camera is cal.last_good
 
@@ -313,7 +314,7 @@ def test_an_opencv_error_in_one_frame_leaves_the_calibrator_working(dataset, sce
 
     view = 'D5'
     cal = DroneCalibrator(scene, CalibSettings(), dataset.reference_camera(view), dataset.reference_image(view))
-    assert cal.process(dataset.load_image(view, 0), 0.0).status == OK
+    assert cal.process(dataset.load_image(view, 0), 0.0).status == CalibStatus.OK
     real_find_pieces = search_module.find_pieces
 
     def asserting_find_pieces(*args, **kwargs):
@@ -321,10 +322,10 @@ def test_an_opencv_error_in_one_frame_leaves_the_calibrator_working(dataset, sce
 
     monkeypatch.setattr(search_module, 'find_pieces', asserting_find_pieces)
     r = cal.process(dataset.load_image(view, 1), 0.5)
-    assert r.status == STALE and 'OpenCV error' in r.message and r.camera is cal.last_good
+    assert r.status == CalibStatus.STALE and 'OpenCV error' in r.message and r.camera is cal.last_good
     monkeypatch.setattr(search_module, 'find_pieces', real_find_pieces)
     r = cal.process(dataset.load_image(view, 2), 1.0)
-    assert r.status == OK
+    assert r.status == CalibStatus.OK
     rot, centre = pose_errors(r.camera, dataset.camera(view, 2))
     assert rot < 0.1 and centre < 0.03
 
@@ -340,6 +341,6 @@ def test_the_half_resolution_whole_image_search_recovers_drone_7(dataset, scene)
     )
     results = [cal.process(dataset.load_image(view, frame), 0.5 * k) for k, frame in enumerate(dataset.frames[:3])]
     assert all(r.full_search for r in results)
-    assert results[2].status == OK, results[2].message
+    assert results[2].status == CalibStatus.OK, results[2].message
     rot, centre = pose_errors(results[2].camera, dataset.camera(view, dataset.frames[2]))
     assert rot < 0.1 and centre < 0.03

@@ -10,6 +10,7 @@ import pytest
 import yaml
 
 from matrix_core.calib.evaluation import summarize_errors
+from matrix_core.calib.status import CalibStatus
 from matrix_core.calib.scene import default_config_path
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.cli.calibrate import calibrate_dataset, simulated_sequence
@@ -41,4 +42,4 @@ def test_simulated_sequences_meet_the_accuracy_limits(variant, tmp_path):
     assert s['ok'] >= (0.55 if variant == 'modified' else 0.75) * len(rows), s
     assert s['rot_median_deg'] <= 0.1 and s['centre_median_m'] <= 0.03, s
     assert s['rot_max_deg'] <= 0.5 and s['centre_max_m'] <= 0.3, s
-    assert all(np.isfinite(r['rot_err_deg']) for r in rows if r['status'] == 'ok')
+    assert all(np.isfinite(r['rot_err_deg']) for r in rows if r['status'] is CalibStatus.OK)

@@ -6,7 +6,8 @@ import cv2
 import numpy as np
 import pytest
 
-from matrix_core.calib.drone_calibrator import FAILED, OK, DroneCalibrator
+from matrix_core.calib.drone_calibrator import DroneCalibrator
+from matrix_core.calib.status import CalibStatus
 from matrix_core.calib.evaluation import pose_errors
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.settings import CalibSettings
@@ -51,7 +52,7 @@ def test_every_real_frame_is_calibrated_from_its_registration(dataset):
             registration = registrar.register(image, frame)
             assert registration.ok, (view, frame, registration.message)
             r = calibrator.process(image, 0.5 * index, registration)
-            assert r.status == OK and r.tracked and r.motion == 'registration', (view, frame, r.message)
+            assert r.status == CalibStatus.OK and r.tracked and r.motion == 'registration', (view, frame, r.message)
             assert 'detect' not in r.timings_s and calibrator.previous_features is None
             rot, centre = pose_errors(r.camera, dataset.camera(view, frame))
             rots.append(rot)
@@ -68,7 +69,7 @@ def test_an_unusable_registration_falls_back_to_the_image_motion(dataset):
         [(np.full((3, 3), np.nan), 'registration homography unusable'), (not_rigid, 'registration not a rigid camera')]
     ):
         r = calibrator.process(dataset.load_image('D5', k), 0.5 * k, Registration.from_img_H_ground(H))
-        assert r.status == OK and r.motion.startswith(why) and 'homography (' in r.motion, r.motion
+        assert r.status == CalibStatus.OK and r.motion.startswith(why) and 'homography (' in r.motion, r.motion
         assert 'detect' in r.timings_s  # searched where the image motion put the boards
 
 
@@ -82,6 +83,6 @@ def test_a_pose_that_disagrees_with_the_registration_is_rejected(dataset):
         ground_T_moved = np.array([[1.0, 0.0, shift_m], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
         wrong = np.linalg.inv(registration.ground_H_img) @ np.linalg.inv(ground_T_moved)
         r = calibrator.process(image, 0.0, Registration.from_img_H_ground(wrong))
-        assert r.status == FAILED and r.camera is None, r.message
+        assert r.status == CalibStatus.FAILED and r.camera is None, r.message
         apart_m = float(r.message.split(' m from the camera the registration implies (> 0.3)')[0])
         assert abs(apart_m - shift_m) < 0.05, r.message

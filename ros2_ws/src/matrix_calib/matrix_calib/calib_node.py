@@ -25,7 +25,8 @@ from matrix_calib.settings import CalibNodeSettings
 from matrix_core import topics
 from matrix_core.calib.prior import initial_prior
 from matrix_core.calib.scene import load_scene
-from matrix_core.calib.drone_calibrator import FAILED, OK, DroneCalibrator
+from matrix_core.calib.drone_calibrator import DroneCalibrator
+from matrix_core.calib.status import CalibStatus
 from matrix_core.datasets import DatasetError, MatrixDataset
 from matrix_core.datasets.drone_inputs import unreadable_drones
 from matrix_core.geometry.camera import check_intrinsics
@@ -186,16 +187,18 @@ class CalibNode(SettingsNode):
             result = self.calibrators[view].process(image, stamp_seconds(stamp), registration)
         except (ConversionError, ValueError) as exc:
             self.get_logger().error(f'{view}: image at {stamp_seconds(stamp):.3f} s skipped: {exc}')
-            self._diagnose(view, stamp, diagnostics.ERROR, f'bad_input: {exc}', {'status': 'bad_input'})
+            bad = CalibStatus.BAD_INPUT
+            self._diagnose(view, stamp, diagnostics.ERROR, f'{bad}: {exc}', {'status': str(bad)})
             return
-        if result.camera is not None and (result.status == OK or self.settings.publish_stale):
+        if result.camera is not None and (result.status is CalibStatus.OK or self.settings.publish_stale):
             info_pub, pose_pub = self.pubs[view]
             optical = msg.header.frame_id or topics.optical_frame(view)
             info_pub.publish(camera_to_camera_info(result.camera, Header(stamp=stamp, frame_id=optical)))
             pose = camera_to_pose(result.camera, Header(stamp=stamp, frame_id=self.settings.world_frame))
             pose_pub.publish(pose)
             self.tf_pub.publish(tf_msg(pose_transform(pose, optical)))  # the same pose, for viewers and tf2
-        level = {OK: diagnostics.OK, FAILED: diagnostics.ERROR}.get(result.status, diagnostics.WARN)
+        levels = {CalibStatus.OK: diagnostics.OK, CalibStatus.FAILED: diagnostics.ERROR}  # stale: a warning
+        level = levels.get(result.status, diagnostics.WARN)
         self._diagnose(
             view,
             stamp,
@@ -203,7 +206,7 @@ class CalibNode(SettingsNode):
             result.message,
             {**result.diagnostics(), 'latency_s': f'{time.perf_counter() - received:.3f}'},
         )
-        if result.status != OK:
+        if result.status is not CalibStatus.OK:
             self.get_logger().warning(f'{view}: {result.status}: {result.message}')
 
     def _diagnose(self, view: str, stamp, level, message: str, values: dict) -> None:

@@ -10,6 +10,7 @@ from geometry_msgs.msg import PoseStamped
 from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, CompressedImage
 
+from matrix_core.calib.status import CalibStatus
 from matrix_core.datasets import MatrixDataset
 from matrix_core.geometry.camera import rotation_angle_deg
 from matrix_core.message_fields import camera_from_camera_info, stamp_seconds
@@ -133,5 +134,6 @@ def test_calib_node_survives_bad_input(matrix_sample, node_executable):
     statuses = [d.status[0] for d in diags]
     assert len(statuses) == 3, statuses
     assert [s.level for s in statuses[:2]] == [DiagnosticStatus.ERROR] * 2
-    assert all(s.message.startswith('bad_input') for s in statuses[:2]), statuses
-    assert dict((kv.key, kv.value) for kv in statuses[2].values)['status'] != 'bad_input'
+    assert all(s.message.startswith(f'{CalibStatus.BAD_INPUT}: ') for s in statuses[:2]), statuses
+    last = CalibStatus.from_name(dict((kv.key, kv.value) for kv in statuses[2].values)['status'])
+    assert last is not CalibStatus.BAD_INPUT

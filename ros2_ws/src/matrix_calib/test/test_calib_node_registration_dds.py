@@ -13,6 +13,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import CompressedImage
 from std_msgs.msg import Header
 
+from matrix_core.calib.status import CalibStatus
 from matrix_core.datasets import MatrixDataset
 from matrix_core.message_fields import stamp_seconds
 from matrix_ros.conversions import image_to_compressed, seconds_to_stamp
@@ -88,11 +89,17 @@ def test_calib_follows_the_registration_and_copes_without_it(matrix_sample, node
         rclpy.shutdown()
     assert unconnected == 0
     again = {kv.key: kv.value for kv in diags.pop(1.0).values}
-    assert again['status'] == 'ok' and again['guide'] == 'time went back, started afresh; registration', again
+    assert (
+        CalibStatus.from_name(again['status']) is CalibStatus.OK
+        and again['guide'] == 'time went back, started afresh; registration'
+    ), again
     diags[1.0] = first
     for k, (kind, guide) in enumerate(PLAN):
         values = {kv.key: kv.value for kv in diags[round(1.0 + 0.5 * k, 3)].values}
-        assert values['status'] == 'ok' and values['guide'].startswith(guide), (kind, values)
+        assert CalibStatus.from_name(values['status']) is CalibStatus.OK and values['guide'].startswith(guide), (
+            kind,
+            values,
+        )
         assert values['tracked'] == str(guide == 'registration'), (kind, values)
     assert 'registration failed: test; calibrated from the image motion' in out, out
     assert 'no registration of t=2.000 s within 1.0 s: calibrated from the image motion' in out, out

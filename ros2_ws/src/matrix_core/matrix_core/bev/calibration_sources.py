@@ -25,6 +25,7 @@ import csv
 from pathlib import Path
 
 
+from matrix_core.calib.status import CalibStatus
 from matrix_core.datasets.types import DatasetError
 from matrix_core.datasets.matrix_conventions import drone_number
 from matrix_core.register.file_frame import BROKEN_RECORD, read_registration
@@ -69,12 +70,16 @@ def _need_dir(name: str, calibration_dir, sub: str) -> Path:
 
 
 def _pnp_statuses(path: Path) -> dict:
-    """(view, frame) -> status from ``calibration_status.csv``; {} when the file is absent."""
+    """(view, frame) -> :class:`CalibStatus` from ``calibration_status.csv``; {} when the file is absent; a
+    status it does not know is a DatasetError naming the file."""
     status_file = path / 'calibration_status.csv'
     if not status_file.is_file():
         return {}
     with open(status_file, newline='') as fh:
-        return {(r['view'], int(r['frame'])): r['status'] for r in csv.DictReader(fh)}
+        try:
+            return {(r['view'], int(r['frame'])): CalibStatus.from_name(r['status']) for r in csv.DictReader(fh)}
+        except ValueError as exc:
+            raise DatasetError(f'{status_file}: {exc}') from exc
 
 
 def _pnp_factory(accepted: tuple, name: str):
@@ -117,8 +122,8 @@ CALIBRATION_SOURCES = {
     'ground_truth': _ground_truth,
     'frozen_first': _frozen_first,
     'reference': _reference,
-    'pnp': _pnp_factory(('ok',), 'pnp'),
-    'pnp_stale': _pnp_factory(('ok', 'stale'), 'pnp_stale'),
+    'pnp': _pnp_factory((CalibStatus.OK,), 'pnp'),
+    'pnp_stale': _pnp_factory((CalibStatus.OK, CalibStatus.STALE), 'pnp_stale'),
     'registration': _registration,
 }
 

@@ -34,18 +34,17 @@ from matrix_core.calib.motion import PriorImageMotion
 from matrix_core.calib.regions import predict_boards
 from matrix_core.calib.scene import CalibScene
 from matrix_core.calib.settings import CalibSettings
+from matrix_core.calib.status import CalibStatus
 from matrix_core.geometry.camera import Camera, rotation_angle_deg
 from matrix_core.register.registration import Registration
 from matrix_core.sync.stamp_restart import StampRestart
 
-OK, STALE, FAILED = 'ok', 'stale', 'failed'
-
 
 @dataclass
 class CalibResult:
-    """One frame's outcome; ``camera`` is None only when ``status == 'failed'``."""
+    """One frame's outcome; ``camera`` is None only when ``status`` is ``FAILED``."""
 
-    status: str
+    status: CalibStatus
     camera: Camera = None
     age_s: float = 0.0
     rms_px: float = float('nan')
@@ -61,7 +60,7 @@ class CalibResult:
     def diagnostics(self) -> dict:
         """The figures a node reports per image (text values, as diagnostic_msgs/KeyValue carries them)."""
         return {
-            'status': self.status,
+            'status': str(self.status),
             'reprojection_rms_px': f'{self.rms_px:.3f}',
             'corners': str(self.corners),
             'pieces_found': str(self.pieces_found),
@@ -171,7 +170,7 @@ class DroneCalibrator:
         if gray.shape[:2] != (height, width):
             raise ValueError(f'image is {gray.shape[1]}x{gray.shape[0]}, intrinsics are for {width}x{height}')
         if self.prior is None:
-            return CalibResult(FAILED, None, message='no pose prior (configure an initial pose)')
+            return CalibResult(CalibStatus.FAILED, None, message='no pose prior (configure an initial pose)')
         frame = _Frame(gray, stamp, t_start)
         try:
             guide, how = registered_camera(self.scene, registration)
@@ -219,7 +218,7 @@ class DroneCalibrator:
         if fit is None:
             return None
         result = self._verdict(fit, correction, frame, dict(tracked=True, motion=how, timings_s=frame.timings))
-        return result if result.status == OK else None
+        return result if result.status is CalibStatus.OK else None
 
     def _search(self, frame: _Frame, predicted: dict, prior: Camera, rough: bool, how: str) -> CalibResult:
         """The result of the checkerboard search where ``predicted`` puts the boards (see ``search_boards``)."""
@@ -240,8 +239,10 @@ class DroneCalibrator:
 
     def _stale(self, stamp: float, message: str, **kw) -> CalibResult:
         if self.last_good is None:
-            return CalibResult(FAILED, None, message=message, **kw)
-        return CalibResult(STALE, self.last_good, age_s=float(stamp - self.last_good_stamp), message=message, **kw)
+            return CalibResult(CalibStatus.FAILED, None, message=message, **kw)
+        return CalibResult(
+            CalibStatus.STALE, self.last_good, age_s=float(stamp - self.last_good_stamp), message=message, **kw
+        )
 
     def _verdict(self, fit, correction: tuple, frame: _Frame, info: dict) -> CalibResult:
         """Accept ``fit`` (a PnPResult, grid-corrected by ``correction`` squares) as this frame's pose when it
@@ -269,4 +270,4 @@ class DroneCalibrator:
         self.prior_is_initial = False
         self.tracked_in_a_row = self.tracked_in_a_row + 1 if info.get('tracked') else 0
         note = f'grid corrected by {correction} squares' if correction != (0, 0) else ''
-        return CalibResult(OK, fit.camera, 0.0, message=note or 'ok', **info)
+        return CalibResult(CalibStatus.OK, fit.camera, 0.0, message=note or 'ok', **info)

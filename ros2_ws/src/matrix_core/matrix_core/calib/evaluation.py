@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from matrix_core.calib.status import CalibStatus
 from matrix_core.geometry.camera import Camera, rotation_angle_deg
 
 
@@ -11,15 +12,16 @@ def pose_errors(estimated: Camera, truth: Camera) -> tuple:
 
 
 def summarize_errors(rows: list) -> dict:
-    """Summary of ``rows`` of dicts with 'status', 'rot_err_deg', 'centre_err_m' (ok rows only)."""
-    ok = [r for r in rows if r['status'] == 'ok']
+    """Summary of ``rows`` of dicts with 'status' (:class:`CalibStatus`), 'rot_err_deg', 'centre_err_m' (ok rows
+    only)."""
+    ok = [r for r in rows if r['status'] is CalibStatus.OK]
     rot = np.array([r['rot_err_deg'] for r in ok])
     ctr = np.array([r['centre_err_m'] for r in ok])
     out = {
         'frames': len(rows),
         'ok': len(ok),
-        'stale': sum(r['status'] == 'stale' for r in rows),
-        'failed': sum(r['status'] == 'failed' for r in rows),
+        'stale': sum(r['status'] is CalibStatus.STALE for r in rows),
+        'failed': sum(r['status'] is CalibStatus.FAILED for r in rows),
     }
     if len(ok):
         out.update(

@@ -35,8 +35,9 @@ from tqdm import tqdm
 
 from matrix_core.cli.argument_types import positive_float
 from matrix_core.cli.selection import add_selection_arguments
-from matrix_core.calib.drone_calibrator import FAILED, OK, STALE, DroneCalibrator
+from matrix_core.calib.drone_calibrator import DroneCalibrator
 from matrix_core.calib.evaluation import pose_errors, summarize_errors
+from matrix_core.calib.status import CalibStatus
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.prior import initial_prior
 from matrix_core.calib.settings import CalibSettings
@@ -157,7 +158,7 @@ def _calibrate_frame(dataset, out, writer, calibrator, view, frame, stamp, regis
         result = calibrator.process(image, stamp, registration)
     except Exception as exc:  # one bad frame (unreadable image, wrong size, calibrator bug) must not end the batch
         reason = _failure(step, exc)
-        return _row(view, frame, FAILED, reason, step, registration=said if step == 'calibrate' else '')
+        return _row(view, frame, CalibStatus.FAILED, reason, step, registration=said if step == 'calibrate' else '')
     row = _row(view, frame, result.status, result.message, result=result, registration=said)
     if result.camera is None:
         return row
@@ -166,7 +167,7 @@ def _calibrate_frame(dataset, out, writer, calibrator, view, frame, stamp, regis
             row['rot_err_deg'], row['centre_err_m'] = pose_errors(result.camera, dataset.camera(view, frame))
         except Exception as exc:  # the pose stands; only its check against the stored calibration failed
             row['failure'], row['message'] = 'compare', f'{row["message"]}; {_failure("compare", exc)}'
-    if result.status == OK or write_stale:
+    if result.status is CalibStatus.OK or write_stale:
         try:
             writer.write_camera(view, frame, result.camera)
             _link_image(dataset, out, view, frame)
@@ -202,7 +203,7 @@ def calibrate_dataset(
             except Exception as exc:  # one drone without a usable prior: its frames fail, the others run
                 reason = _failure('prior', exc)
                 tqdm.write(f'{view}: {reason}')
-                rows += [_row(view, frame, FAILED, reason, 'prior') for frame in frames]
+                rows += [_row(view, frame, CalibStatus.FAILED, reason, 'prior') for frame in frames]
                 bar.update(len(frames))
                 continue
             for index, frame in enumerate(frames):
@@ -269,10 +270,12 @@ def run(args) -> int:
         args.registration,
         args.write_stale,
     )
-    counts = {k: sum(r['status'] == k for r in rows) for k in (OK, STALE, FAILED)}
+    counts = {
+        str(k): sum(r['status'] is k for r in rows) for k in (CalibStatus.OK, CalibStatus.STALE, CalibStatus.FAILED)
+    }
     raised = sum(bool(r['failure']) for r in rows)
     written = sum(r['written'] for r in rows)
-    stale_kept = sum(r['status'] == STALE and not r['written'] for r in rows)
+    stale_kept = sum(r['status'] is CalibStatus.STALE and not r['written'] for r in rows)
     guided = sum(r['guide'] == 'registration' for r in rows)
     print(
         f'{len(rows)} images: {counts}; {raised} raised (step in the CSV\'s "failure"); wrote {written} '
