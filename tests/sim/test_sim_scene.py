@@ -134,8 +134,15 @@ def test_pnp_on_true_and_detected_board_corners_recovers_pose():
     assert rot.min() <= 0.05 and pos.min() <= 0.02
 
 
-def test_config_rejects_area_outside_position_grid(tmp_path):
-    bad = tmp_path / 'far.yaml'
-    bad.write_text('name: far\narea: [10.0, -15.0, 40.0, 15.0]\n')
-    with pytest.raises(ValueError, match='position grid'):
-        load_scene_config(bad)
+def test_matrix_format_refuses_an_area_outside_position_grid(tmp_path):
+    """A scene may have any area, but the MATRIX format's positionIDs cover only the MATRIX square: simulating
+    it without a site is refused before anything is written, pointing to --site."""
+    from matrix_core.sim.sequence import simulate
+    from matrix_core.sim.settings import SimulateSettings
+
+    far = tmp_path / 'far.yaml'
+    far.write_text('name: far\narea: [10.0, -15.0, 40.0, 15.0]\n')
+    assert load_scene_config(far).area == [10.0, -15.0, 40.0, 15.0]
+    with pytest.raises(ValueError, match='position grid.*--site'):
+        simulate(SimulateSettings(config=str(far), frames=1, fast=True, out=str(tmp_path / 'out')), progress=False)
+    assert not (tmp_path / 'out').exists()

@@ -1,4 +1,5 @@
-"""``matrix-tracker bag``: turn a MATRIX-format folder into a rosbag2 (MCAP) sequence bag, or list a bag.
+"""``matrix-tracker bag``: turn a MATRIX-format folder or a site dataset into a rosbag2 (MCAP) sequence bag, or list
+a bag.
 
     matrix-tracker bag ../shared/matrix_sample --out bags/matrix_sample      # write
     matrix-tracker bag bags/matrix_sample                                     # list topics and counts
@@ -19,7 +20,7 @@ from pathlib import Path
 
 from matrix_core.bags import write_sequence_bag
 from matrix_core.bags.salvage import topic_counts
-from matrix_core.datasets import MatrixDataset
+from matrix_core.datasets import DatasetError, open_dataset
 from matrix_core.output_paths import atomic_folder, check_output
 
 
@@ -27,7 +28,7 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         'bag', help='write a MATRIX-format folder as a rosbag2 sequence bag, or list a bag', description=__doc__
     )
-    p.add_argument('source', help='MATRIX-format folder (to write a bag) or a bag folder (to list it)')
+    p.add_argument('source', help='MATRIX-format folder or site dataset (to write a bag) or a bag folder (to list it)')
     p.add_argument('--out', help='bag folder to create (must not exist)')
     p.add_argument('--compressed', action='store_true', help='store JPEG CompressedImage instead of raw Image')
     p.set_defaults(func=run)
@@ -43,7 +44,9 @@ def run(args) -> int:
     check_output(out, [source])
     if out.exists():
         raise FileExistsError(f'{out} exists; rosbag2 writes a new folder')
-    dataset = MatrixDataset(source)
+    dataset = open_dataset(source)
+    if not hasattr(dataset, 'pedestrian_positions'):  # the bag carries every person's ground-truth position
+        raise DatasetError(f'{source} is a {dataset.format_name} folder; bag needs a MATRIX folder or a site dataset')
     # written under a temporary name and moved to --out when every frame is in it: a bad image (named in the
     # error) or an interrupted run leaves no bag that a player or `bag` listing could take for the sequence
     with atomic_folder(out) as partial:

@@ -3,11 +3,14 @@
 from pathlib import Path
 
 from matrix_core.datasets.matrix_reader import MatrixDataset
+from matrix_core.datasets.site_reader import META_FILE as SITE_META_FILE
+from matrix_core.datasets.site_reader import SITE_FILE, SiteDataset
 from matrix_core.datasets.static_rig import MultiviewXDataset, WildtrackDataset
 from matrix_core.datasets.types import DatasetError
 
 # (reader, marker paths that identify the format)
 _FORMATS = (
+    (SiteDataset, (SITE_META_FILE, SITE_FILE)),
     (MatrixDataset, ('image_subsets', 'calibrations/intrinsic')),
     (WildtrackDataset, ('Image_subsets', 'calibrations/intrinsic_zero')),
     (MultiviewXDataset, ('Image_subsets', 'calibrations/intrinsic')),
@@ -15,7 +18,7 @@ _FORMATS = (
 
 
 def open_dataset(path):
-    """Open a MATRIX, Wildtrack or MultiviewX folder; raises :class:`DatasetError` saying why not."""
+    """Open a site dataset, MATRIX, Wildtrack or MultiviewX folder; raises :class:`DatasetError` saying why not."""
     root = Path(path)
     if not root.is_dir():
         raise DatasetError(f'dataset folder not found: {root}')
@@ -23,10 +26,11 @@ def open_dataset(path):
     for reader, markers in _FORMATS:
         # Compare names exactly: 'image_subsets' (MATRIX) vs 'Image_subsets' (the others) tells them apart
         # even on case-insensitive file systems.
-        if markers[0] in names and (root / markers[1]).is_dir():
+        if markers[0] in names and ((root / markers[1]).is_dir() or (root / markers[1]).is_file()):
             return reader(root)
     raise DatasetError(
-        f'{root} is not a MATRIX, Wildtrack or MultiviewX folder: expected image_subsets/ + '
+        f'{root} is not a site dataset, MATRIX, Wildtrack or MultiviewX folder: expected site_dataset.json + '
+        f'site.yaml (site dataset), image_subsets/ + '
         f'calibrations/intrinsic/ (MATRIX), Image_subsets/ + calibrations/intrinsic_zero/ (Wildtrack) or '
         f'Image_subsets/ + calibrations/intrinsic/ (MultiviewX); found {sorted(names)[:12]}'
     )

@@ -5,8 +5,10 @@ three shipped variants live in ``matrix_core/sim/configs/{simple,complex,modifie
 the path of their own file. Unknown keys are rejected so that typos do not silently fall back to defaults.
 
 Convention: internal world frame (right-handed, metres, z up, ground z = 0). The real MATRIX square is
-``MATRIX_AREA`` (x in [0, 30], y in [-30, 0]); areas must stay inside it because MATRIX positionIDs are a
-300 x 300 grid of 0.1 m cells.
+``MATRIX_AREA`` (x in [0, 30], y in [-30, 0]). A scene may have any area; only a sequence written in the MATRIX
+folder format must stay inside that square (:func:`check_matrix_grid`), because MATRIX positionIDs are a
+300 x 300 grid of 0.1 m cells. A site (``simulate --site``) is written as a site dataset, with metric
+positions, and has no such limit.
 """
 
 import dataclasses
@@ -66,6 +68,16 @@ class BoardConfig:
         side = self.squares * self.square_m
         return (self.origin[0], self.origin[1], self.origin[0] + side, self.origin[1] + side)
 
+    @property
+    def squares_xy(self) -> tuple:
+        """(squares along x, squares along y)."""
+        return (self.squares, self.squares)
+
+    @property
+    def dark_parity(self) -> int:
+        """Square (i, j) counted from ``origin`` is black when ``(i + j + dark_parity)`` is even."""
+        return 0
+
 
 @dataclass
 class CrowdConfig:
@@ -109,8 +121,9 @@ class DroneConfig:
     hfov_deg: float = 70.0
 
     def __post_init__(self):
-        if not 1 <= self.count <= 8:
-            raise ValueError(f'drone count must be 1..8 (MATRIX views D1..D8), got {self.count}')
+        # 8 places on the MATRIX ring (D1..D8); a site places up to 16 drones itself (sim/site_rig.py)
+        if not 1 <= self.count <= 16:
+            raise ValueError(f'drone count must be 1..16, got {self.count}')
         if not 10.0 <= self.hfov_deg <= 150.0 or self.v_max <= 0 or self.altitude <= 0:
             raise ValueError(f'invalid drone config {self}')
 
@@ -226,10 +239,10 @@ class SceneConfig:
     def __post_init__(self):
         if self.floor not in ('cement', 'cobblestone'):
             raise ValueError(f'floor must be cement or cobblestone, got {self.floor!r}')
-        x0, y0, x1, y1 = self.area
-        gx0, gy0, gx1, gy1 = MATRIX_AREA  # the positionID grid
-        if not (gx0 <= x0 < x1 <= gx1 and gy0 <= y0 < y1 <= gy1):
-            raise ValueError(f'area {self.area} must lie inside the MATRIX position grid {MATRIX_AREA}')
+        if len(self.area) != 4 or not (self.area[0] < self.area[2] and self.area[1] < self.area[3]):
+            raise ValueError(
+                f'area must be [x_min, y_min, x_max, y_max] with x_min < x_max, y_min < y_max, got {self.area}'
+            )
         if self.building_distance <= self.drones.ring_half_side + 2.0:
             raise ValueError('building_distance must be beyond the drone ring (+2 m)')
 
@@ -242,6 +255,18 @@ class SceneConfig:
     def obstacles(self) -> list:
         """Every occluding box on the ground (block first)."""
         return ([self.block] if self.block is not None else []) + list(self.pillars)
+
+
+def check_matrix_grid(area) -> None:
+    """ValueError unless ``area`` lies inside the MATRIX positionID grid (``MATRIX_AREA``): what a sequence in
+    the MATRIX folder format needs (a site dataset, ``simulate --site``, does not)."""
+    x0, y0, x1, y1 = area
+    gx0, gy0, gx1, gy1 = MATRIX_AREA  # the positionID grid
+    if not (gx0 <= x0 < x1 <= gx1 and gy0 <= y0 < y1 <= gy1):
+        raise ValueError(
+            f'area {list(area)} must lie inside the MATRIX position grid {list(MATRIX_AREA)} to be written in the '
+            f'MATRIX format; simulate --site SITE writes any area as a site dataset'
+        )
 
 
 def _build(cls, data, where: str):

@@ -53,6 +53,27 @@ def look_at_angles(center: np.ndarray, target: np.ndarray) -> tuple:
     return float(np.arctan2(d[1], d[0])), float(np.arctan2(-d[2], np.hypot(d[0], d[1])))
 
 
+@dataclass(frozen=True)
+class DroneRig:
+    """A site's drones (``sim/site_rig.py``): where each hovers and the camera it carries, instead of the
+    MATRIX ring of eight drones with one camera.
+
+    Attributes:
+        names: (N,) drone names, the view names.
+        homes: (N, 3) metres: the point each drone's random targets are drawn around.
+        K: (N,) (3, 3) intrinsics at the rendered image size, pixel-centre convention.
+        sizes: (N,) (width, height) of the rendered images.
+        references: (N,) the :class:`Camera` of each drone's reference image, or None: the reference pose is
+            then the home, aimed exactly at the scene centre.
+    """
+
+    names: tuple
+    homes: np.ndarray
+    K: tuple
+    sizes: tuple
+    references: tuple
+
+
 @dataclass
 class DroneState:
     """State of one drone. position/velocity: (3,) metres, m/s; angles in radians."""
@@ -80,16 +101,27 @@ class DroneFleet:
         config: :class:`~matrix_core.sim.config.DroneConfig`.
         center: (2,) scene centre (x, y) metres; the cameras aim at (center, 0) plus a wandering offset.
         rng: random generator used only for targets and aim offsets (deterministic per seed).
+        rig: a site's :class:`DroneRig` (its homes, cameras and reference poses), or None for the MATRIX ring
+            (``config.count`` <= 8 drones, ``config.hfov_deg`` cameras at the size each call asks for).
     """
 
-    def __init__(self, config, center, rng: np.random.Generator):
+    def __init__(self, config, center, rng: np.random.Generator, rig: DroneRig = None):
         self.config = config
         self.center = np.array([center[0], center[1], 0.0])
         self.rng = rng
+        self.rig = rig
+        if rig is None and config.count > len(HOME_DIRECTIONS):
+            raise ValueError(
+                f'the MATRIX ring has {len(HOME_DIRECTIONS)} places (D1..D8), got {config.count} drones; '
+                f'more drones need a site (simulate --site)'
+            )
         self.K_ref = intrinsics(REFERENCE_WIDTH, REFERENCE_WIDTH * 9 // 16, config.hfov_deg)
         self.drones = []
-        for k in range(config.count):
-            home = np.array([*(self.center[:2] + config.ring_half_side * HOME_DIRECTIONS[k]), config.altitude])
+        for k in range(config.count if rig is None else len(rig.names)):
+            if rig is None:
+                home = np.array([*(self.center[:2] + config.ring_half_side * HOME_DIRECTIONS[k]), config.altitude])
+            else:
+                home = np.asarray(rig.homes[k], dtype=float)
             start = self._random_target(home)
             yaw, pitch = look_at_angles(start, self.center)
             self.drones.append(
@@ -128,19 +160,31 @@ class DroneFleet:
 
     def reference_camera(self, index: int, width: int, height: int) -> Camera:
         """Static reference pose of drone ``index`` (``reference_ring_half_side``, ``reference_altitude``),
-        aimed exactly at the scene centre: the view of the ``reference/`` folder, as in the real sample."""
+        aimed exactly at the scene centre: the view of the ``reference/`` folder, as in the real sample.
+        With a rig: its reference camera of that drone, else its home aimed at the centre, at the rig's size."""
         c = self.config
-        pos = np.array([*(self.center[:2] + c.reference_ring_half_side * HOME_DIRECTIONS[index]), c.reference_altitude])
+        if self.rig is not None:
+            if self.rig.references[index] is not None:
+                return self.rig.references[index]
+            pos = np.asarray(self.rig.homes[index], dtype=float)
+        else:
+            pos = np.array(
+                [*(self.center[:2] + c.reference_ring_half_side * HOME_DIRECTIONS[index]), c.reference_altitude]
+            )
         yaw, pitch = look_at_angles(pos, self.center)
-        return self._camera(pos, camera_rotation(yaw, pitch, 0.0), width, height)
+        return self._camera(pos, camera_rotation(yaw, pitch, 0.0), width, height, index)
 
     def camera(self, index: int, width: int, height: int) -> Camera:
-        """Current camera of drone ``index`` at the given render size (same pose at every size)."""
+        """Current camera of drone ``index`` at the given render size (same pose at every size); with a rig, at
+        the rig's intrinsics and size of that drone (``width``, ``height`` are not used)."""
         d = self.drones[index]
-        return self._camera(d.position, camera_rotation(d.yaw, d.pitch + d.body_pitch, d.roll), width, height)
+        return self._camera(d.position, camera_rotation(d.yaw, d.pitch + d.body_pitch, d.roll), width, height, index)
 
-    def _camera(self, position, cam_R_world, width, height) -> Camera:
-        K = intrinsics(width, height, self.config.hfov_deg)
+    def _camera(self, position, cam_R_world, width, height, index: int) -> Camera:
+        if self.rig is not None:
+            (width, height), K = self.rig.sizes[index], self.rig.K[index]
+        else:
+            K = intrinsics(width, height, self.config.hfov_deg)
         return Camera(K, pose_matrix(cam_R_world, -cam_R_world @ position), width, height)
 
     def step(self, duration: float) -> None:

@@ -228,9 +228,8 @@ class Renderer:
         if not self.light.plain:
             white, black = (tuple(float(v) for v in np.multiply(c, self.light.gain(UP))) for c in (white, black))
         for board in self.scene.boards:
-            n, s = board.squares, board.square_m
-            g = np.arange(n + 1) * s
-            gx, gy = np.meshgrid(board.origin[0] + g, board.origin[1] + g)
+            (nx, ny), s = board.squares_xy, board.square_m
+            gx, gy = np.meshgrid(board.origin[0] + np.arange(nx + 1) * s, board.origin[1] + np.arange(ny + 1) * s)
             grid = np.stack([gx, gy, np.full(gx.shape, board.z)], axis=-1)  # (n+1, n+1, 3), [j, i]
             cam = to_camera(camera, grid)
             if cam[..., 2].max() < 0.3:
@@ -241,8 +240,8 @@ class Renderer:
             cv2.fillConvexPoly(img, fixed(project_camera_points(camera.K, outline)), white, cv2.LINE_AA, SHIFT)
             ok = cam[..., 2] > 0.3
             uv = project_camera_points(camera.K, np.where(ok[..., None], cam, 1.0))
-            for j in range(n):
-                for i in range(j % 2, n, 2):  # square (i, j) black when i + j is even
+            for j in range(ny):
+                for i in range((j + board.dark_parity) % 2, nx, 2):  # black when i + j + dark_parity is even
                     if ok[j, i] and ok[j, i + 1] and ok[j + 1, i + 1] and ok[j + 1, i]:
                         quad = uv[[j, j, j + 1, j + 1], [i, i + 1, i + 1, i]]
                         cv2.fillConvexPoly(img, fixed(quad), black, cv2.LINE_AA, SHIFT)

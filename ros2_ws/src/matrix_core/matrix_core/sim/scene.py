@@ -21,7 +21,8 @@ from matrix_core.sim.textures import (
     texture_pyramid,
 )
 
-# Marker id of board b's inner corner (i, j), i, j = 1..n-1: 1000 * (b + 1) + (j - 1) * (n - 1) + (i - 1).
+# Marker id of board b's inner corner (i, j), i = 1..nx-1, j = 1..ny-1 (nx, ny squares along x, y):
+# 1000 * (b + 1) + (j - 1) * (nx - 1) + (i - 1).
 BOARD_MARKER_BASE = 1000
 
 
@@ -44,9 +45,9 @@ class Facade:
 
 def board_corners(board, index: int) -> tuple:
     """Inner corners of a board: ((M,) marker ids, (M, 3) world metres), i along x fastest."""
-    n = board.squares
-    ii, jj = np.meshgrid(np.arange(1, n), np.arange(1, n))
-    ids = BOARD_MARKER_BASE * (index + 1) + (jj - 1) * (n - 1) + (ii - 1)
+    nx, ny = board.squares_xy
+    ii, jj = np.meshgrid(np.arange(1, nx), np.arange(1, ny))
+    ids = BOARD_MARKER_BASE * (index + 1) + (jj - 1) * (nx - 1) + (ii - 1)
     xyz = np.stack(
         [board.origin[0] + ii * board.square_m, board.origin[1] + jj * board.square_m, np.full(ii.shape, board.z)],
         axis=-1,

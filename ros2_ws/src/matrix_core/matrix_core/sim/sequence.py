@@ -18,6 +18,7 @@ and not hidden by a box (people may stand on them).
 """
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +29,7 @@ from matrix_core.datasets.types import PersonAnnotation
 from matrix_core.reference_size import REFERENCE_WIDTH
 from matrix_core.sim.appearance import person_looks
 from matrix_core.sim.camera_effects import CameraEffects
-from matrix_core.sim.config import load_scene_config, scene_config_to_dict
+from matrix_core.sim.config import check_matrix_grid, load_scene_config, scene_config_to_dict
 from matrix_core.sim.crowd import Crowd, ReplayCrowd
 from matrix_core.sim.drones import DroneFleet
 from matrix_core.sim.ground_truth import annotation_box, view_truth, visible_markers
@@ -48,10 +49,12 @@ class Simulation:
     """The moving scene of one config and seed, independent of the render size.
 
     The random streams of scene, crowd, drones and looks are separate children of ``seed``, so e.g.
-    rendering at another resolution or replaying trajectories does not change the drone motion.
+    rendering at another resolution or replaying trajectories does not change the drone motion. ``rig``: a
+    site's drones (:class:`~matrix_core.sim.drones.DroneRig`; views named after them, their own cameras), or
+    None for the MATRIX ring D1..D8 rendered at ``width`` x ``height``.
     """
 
-    def __init__(self, config, seed: int, width: int, height: int, replay=None):
+    def __init__(self, config, seed: int, width: int, height: int, replay=None, rig=None):
         self.config = config
         self.width, self.height = width, height
         seqs = np.random.SeedSequence(seed).spawn(6)
@@ -64,9 +67,9 @@ class Simulation:
             self.crowd = ReplayCrowd(replay, crowd_rng, config.crowd.height_range)
         else:
             self.crowd = Crowd(self.scene.crowd_config(), crowd_rng)  # distractors in the area are obstacles
-        self.fleet = DroneFleet(config.drones, config.center, drone_rng)
+        self.fleet = DroneFleet(config.drones, config.center, drone_rng, rig)
         self.colors, self.dress = person_looks(look_rng, len(self.crowd.ids), config.crowd.dress_fraction)
-        self.views = [view_name(k + 1) for k in range(config.drones.count)]
+        self.views = [view_name(k + 1) for k in range(config.drones.count)] if rig is None else list(rig.names)
         self.effects = CameraEffects(config.camera_effects, len(self.views), effects_seq)
 
     def step(self, seconds: float) -> None:
@@ -110,48 +113,90 @@ class Simulation:
         return cam, img, ids, visible
 
 
-def write_frame(sim: Simulation, writer: MatrixWriter, frame: int, out: Path) -> dict:
-    """Render and write one frame; returns {'images': {view: img}, 'cameras': {view: Camera}, 'positions'}."""
-    images, cameras, truth = {}, {}, {}
+@dataclass
+class FrameTruth:
+    """One rendered frame and its ground truth, in the internal convention, before any file format.
+
+    Attributes:
+        images: view -> (H, W, 3) BGR uint8; cameras: view -> Camera.
+        positions: person id -> (3,) foot point, metres (every person, seen or not).
+        boxes: person id -> {view: BoundingBox} for the views that see the person.
+        seen: view -> {person id: (3,) metres} of the persons that view sees (line of sight).
+        markers: view -> ((M,) board marker ids, (M, 2) pixels) of the board corners it sees.
+        truth: view -> :func:`~matrix_core.sim.ground_truth.view_truth` (``sim_ground_truth/TTTT.json``).
+    """
+
+    images: dict
+    cameras: dict
+    positions: dict
+    boxes: dict
+    seen: dict
+    markers: dict
+    truth: dict
+
+
+def render_frame(sim: Simulation) -> FrameTruth:
+    """Render every view of the simulation's current state (in view order: each call is one frame of every
+    camera's effects)."""
+    images, cameras, truth, seen_by, markers = {}, {}, {}, {}, {}
     boxes = {int(i): {} for i in sim.crowd.ids}
     positions = sim.positions()
     for k, view in enumerate(sim.views):
         cam, img, _, visible = sim.render_view(k)
         images[view], cameras[view] = img, cam
-        writer.write_image(view, frame, img)
-        writer.write_camera(view, frame, cam)
         seen = {}
         for pid, xy, vis in zip(sim.crowd.ids, sim.crowd.positions, visible):
             if vis:
                 boxes[int(pid)][view] = annotation_box(cam, xy)
                 seen[int(pid)] = positions[int(pid)]
-        writer.write_line_of_sight(view, frame, seen)
-        ids, uv = visible_markers(cam, sim.scene.marker_ids, sim.scene.marker_xyz, sim.scene.occluders, rays_blocked)
-        writer.write_plane_points(view, frame, ids, uv)
+        seen_by[view] = seen
+        markers[view] = visible_markers(
+            cam, sim.scene.marker_ids, sim.scene.marker_xyz, sim.scene.occluders, rays_blocked
+        )
         truth[view] = view_truth(cam, sim.fleet.drones[k])
+    return FrameTruth(images, cameras, positions, boxes, seen_by, markers, truth)
+
+
+def write_truth(out: Path, frame: int, data: FrameTruth) -> None:
+    """``sim_ground_truth/TTTT.json``: the simulator-only truth of every view (module docstring)."""
+    path = out / 'sim_ground_truth' / f'{frame:04d}.json'
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data.truth, indent=1, sort_keys=True) + '\n')
+
+
+def write_frame(sim: Simulation, writer: MatrixWriter, frame: int, out: Path) -> FrameTruth:
+    """Render one frame and write it in the MATRIX format."""
+    data = render_frame(sim)
+    for view in sim.views:
+        writer.write_image(view, frame, data.images[view])
+        writer.write_camera(view, frame, data.cameras[view])
+        writer.write_line_of_sight(view, frame, data.seen[view])
+        writer.write_plane_points(view, frame, *data.markers[view])
+    positions = data.positions
     persons = [
-        PersonAnnotation(pid, world_to_position_id(positions[pid][:2]), positions[pid][:2], boxes[pid])
+        PersonAnnotation(pid, world_to_position_id(positions[pid][:2]), positions[pid][:2], data.boxes[pid])
         for pid in sorted(positions)
     ]
     writer.write_annotations(frame, persons, sim.views)
     writer.write_pedestrians(frame, positions)
-    path = out / 'sim_ground_truth' / f'{frame:04d}.json'
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(truth, indent=1, sort_keys=True) + '\n')
-    return {'images': images, 'cameras': cameras, 'positions': positions}
+    write_truth(out, frame, data)
+    return data
 
 
 def simulate(settings, progress: bool = True) -> Path:
-    """Generate ``settings.frames`` frames into ``settings.out`` (see the module docstring)."""
-    from tqdm import tqdm
-
-    from matrix_core.bags import SequenceBagWriter, SequenceClock
+    """Generate ``settings.frames`` frames into ``settings.out`` (see the module docstring); with
+    ``settings.site``, a site dataset of that site (:mod:`matrix_core.sim.site_sequence`)."""
     from matrix_core.datasets import open_dataset
 
     out = Path(settings.out)
     if out.exists() and any(out.iterdir()):
         raise ValueError(f'output folder {out} is not empty')
+    if settings.site_dataset:
+        from matrix_core.sim.site_sequence import simulate_site
+
+        return simulate_site(settings, progress)
     config = load_scene_config(settings.config)
+    check_matrix_grid(config.area)
     replay = open_dataset(settings.replay) if settings.replay else None
     sim = Simulation(config, settings.seed, settings.width, settings.height, replay)
     meta = {
@@ -169,19 +214,32 @@ def simulate(settings, progress: bool = True) -> Path:
         cam, img = sim.render_reference(k)
         writer.write_image(view, 0, img, reference=True)
         writer.write_camera(view, 0, cam, reference=True)
+    run_frames(sim, settings, out, lambda frame: write_frame(sim, writer, frame, out), progress)
+    return out
+
+
+def run_frames(sim: Simulation, settings, out: Path, write, progress: bool = True) -> None:
+    """Step, render and write ``settings.frames`` frames with ``write(frame) -> FrameTruth`` (and into
+    ``out/bag`` with ``settings.bag``); a frame that raises is left out (its files removed) and the run goes
+    on; ``simulate_summary.json`` is written on any exit."""
+    from tqdm import tqdm
+
+    from matrix_core.bags import SequenceBagWriter, SequenceClock
+
     clock = SequenceClock(settings.start_time, settings.frame_period)
     bag = SequenceBagWriter(out / 'bag', sim.views, settings.compressed, clock) if settings.bag else None
     if bag is not None:
         bag.__enter__()
     failed, written, stopped = {}, [], 'interrupted'
+    name = sim.config.name
     try:
-        for frame in tqdm(range(settings.frames), desc=f'simulate {config.name}', unit='frame', disable=not progress):
+        for frame in tqdm(range(settings.frames), desc=f'simulate {name}', unit='frame', disable=not progress):
             try:
                 if frame > 0:
                     sim.step(settings.frame_period)
-                data = write_frame(sim, writer, frame, out)
+                data = write(frame)
                 if bag is not None:
-                    bag.write_frame(frame, data['images'], data['cameras'], data['positions'])
+                    bag.write_frame(frame, data.images, data.cameras, data.positions)
                 written.append(frame)
             except Exception as exc:  # one frame's failure: that frame is left out, the sequence goes on
                 failed[frame] = f'{type(exc).__name__}: {exc}'
@@ -192,7 +250,6 @@ def simulate(settings, progress: bool = True) -> Path:
         if bag is not None:
             bag.__exit__(None, None, None)  # closed on any exit: the frames written stay readable
         write_summary(out, settings.frames, written, failed, stopped)
-    return out
 
 
 SUMMARY_FILE = 'simulate_summary.json'

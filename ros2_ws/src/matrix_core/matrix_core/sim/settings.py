@@ -4,6 +4,7 @@ from dataclasses import dataclass, field
 
 from matrix_core.bags.clock import DEFAULT_CLOCK
 from matrix_core.reference_size import REFERENCE_HEIGHT, REFERENCE_WIDTH
+from matrix_core.site.shipped import MATRIX_SITE
 
 
 @dataclass
@@ -16,7 +17,35 @@ class SimulateSettings:
     seed: int = field(
         default=0, metadata={'help': 'random seed: the same seed gives the same sequence (byte-identical annotations)'}
     )
-    out: str = field(default='out/sim', metadata={'help': 'output MATRIX folder (must be empty or absent)'})
+    out: str = field(
+        default='out/sim',
+        metadata={'help': 'output folder (MATRIX format, or a site dataset with a site): new or empty'},
+    )
+    # The MATRIX site (the default) is simulated by the --config variants in the MATRIX format, as always;
+    # any other site is rendered from its own file and written as a site dataset (docs/site-file.md).
+    site: str = field(
+        default=MATRIX_SITE,
+        metadata={
+            'help': 'site file (docs/site-file.md): a path or a shipped site (matrix, plaza). Default matrix: the '
+            '--config variant in the MATRIX format; any other site: its area, drones, cameras, boards and '
+            'obstacles, written as a site dataset (--config then gives the crowd, light and distractors)'
+        },
+    )
+    image_scale: float = field(
+        default=1.0,
+        metadata={'help': 'with a site: render each drone at this fraction of its image size (intrinsics scaled)'},
+    )
+    ring_radius: float = field(
+        default=0.0,
+        metadata={
+            'help': 'with a site: drones without a home or reference fly on a ring this far from the area centre, '
+            'm (0: the area\'s half diagonal)'
+        },
+    )
+    altitude: float = field(
+        default=0.0,
+        metadata={'help': 'with a site: flying height of drones without altitude_m or reference, m (0: the config\'s)'},
+    )
     width: int = field(default=REFERENCE_WIDTH, metadata={'help': 'image width in pixels (the paper used 1920x1080)'})
     height: int = field(default=REFERENCE_HEIGHT, metadata={'help': 'image height in pixels'})
     fast: bool = field(default=False, metadata={'help': 'fast low-resolution mode: 640x360 (overrides width/height)'})
@@ -34,8 +63,27 @@ class SimulateSettings:
         default=DEFAULT_CLOCK.start_time, metadata={'help': 'bag header stamp of the first frame, seconds'}
     )
 
+    @property
+    def site_dataset(self) -> bool:
+        """Whether this run renders a site file into a site dataset (any site but the MATRIX one)."""
+        return self.site != MATRIX_SITE
+
     def __post_init__(self):
-        if self.fast:
+        if self.site_dataset and (self.width, self.height) != (REFERENCE_WIDTH, REFERENCE_HEIGHT):
+            raise ValueError(
+                'width/height do not apply with a site: each drone\'s image size comes from the site '
+                '(image_scale or --fast renders smaller)'
+            )
+        if not 0.05 <= self.image_scale <= 1.0 or self.ring_radius < 0 or self.altitude < 0:
+            raise ValueError(
+                f'image_scale must be in [0.05, 1], ring_radius and altitude >= 0; got {self.image_scale}, '
+                f'{self.ring_radius}, {self.altitude}'
+            )
+        if (self.image_scale != 1.0 or self.ring_radius or self.altitude) and not self.site_dataset:
+            raise ValueError('image_scale, ring_radius and altitude apply only with a --site other than matrix')
+        if self.fast and self.site_dataset:
+            self.image_scale = min(self.image_scale, 0.5)  # a site's sizes are its own: --fast halves them
+        elif self.fast:
             self.width, self.height = 640, 360
         if self.frames < 1:
             raise ValueError(f'frames must be >= 1, got {self.frames}')
