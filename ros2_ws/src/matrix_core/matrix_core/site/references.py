@@ -71,7 +71,9 @@ def reference_camera(site: Site, drone: DroneSpec) -> Camera:
     if drone.reference is None:
         raise SiteError(f'{site.path}: {_key(site, drone.name)}: no reference (references.source is simulate)')
     cal = drone.reference.calibration
-    if cal.format is not CalibrationFormat.MATRIX_XML:  # the one format so far; a new one is read here
+    if cal.format is CalibrationFormat.CAMERA_YAML:
+        return _camera_yaml(site, drone)
+    if cal.format is not CalibrationFormat.MATRIX_XML:
         raise SiteError(f'{site.path}: {_key(site, drone.name)}: cannot read calibration format {cal.format.value}')
     try:
         intr = read_matrices(resolve(site, cal.intrinsic), ['camera_matrix', 'distortion_coefficients'])
@@ -81,6 +83,27 @@ def reference_camera(site: Site, drone: DroneSpec) -> Camera:
         )
     except (DatasetError, ValueError) as exc:
         raise SiteError(f'{site.path}: {_key(site, drone.name)}.reference.calibration: {exc}') from None
+
+
+def _camera_yaml(site: Site, drone: DroneSpec) -> Camera:
+    """The ``camera_yaml`` calibration of ``drone``'s reference (schema.CalibrationFormat)."""
+    import numpy as np
+
+    from matrix_core.settings import read_yaml
+
+    cal = drone.reference.calibration
+    where = f'{site.path}: {_key(site, drone.name)}.reference.calibration'
+    try:
+        intr, extr = read_yaml(resolve(site, cal.intrinsic)), read_yaml(resolve(site, cal.extrinsic))
+        size = tuple(int(v) for v in intr['image_size'])
+        if size != tuple(drone.camera.image_size):
+            raise ValueError(
+                f'intrinsic image_size {list(size)} is not camera.image_size {list(drone.camera.image_size)}'
+            )
+        K = np.asarray(intr['K'], float).reshape(3, 3)
+        return Camera(K, np.asarray(extr['cam_T_world'], float).reshape(4, 4), *size, np.asarray(intr['dist'], float))
+    except (KeyError, TypeError, ValueError, FileNotFoundError) as exc:
+        raise SiteError(f'{where}: {type(exc).__name__ if isinstance(exc, KeyError) else ""}{exc}') from None
 
 
 def require_references(site: Site) -> None:

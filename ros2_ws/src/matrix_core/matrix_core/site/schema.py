@@ -28,6 +28,9 @@ class CalibrationFormat(enum.Enum):
     # rvec, tvec) in the MATRIX file conventions (left-handed world, mirrored image), converted by
     # matrix_core.datasets.matrix_conventions.camera_from_file.
     MATRIX_XML = 'matrix_xml'
+    # Two YAML files in the internal conventions (matrix_core.geometry.camera), as `site init` writes them:
+    # intrinsic {image_size: [w, h], K: 9 numbers, dist: 5 numbers}, extrinsic {cam_T_world: 4 x 4 rows}.
+    CAMERA_YAML = 'camera_yaml'
 
 
 @dataclass(frozen=True)
