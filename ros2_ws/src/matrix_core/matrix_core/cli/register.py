@@ -80,11 +80,12 @@ def _failure(stage: str, exc: Exception) -> str:
 
 
 def _pair(view, frame, status, message, failure='', error=None, result=None) -> dict:
-    """One row of summary.json; ``failure`` names the step that raised ('' when none did)."""
+    """One row of summary.json (``status`` a :class:`RegistrationStatus`, written as its name); ``failure``
+    names the step that raised ('' when none did)."""
     return {
         'view': view,
         'frame': frame,
-        'status': str(status),
+        'status': status,
         'error_px': error,
         'confidence': result.confidence if result else None,
         'inliers': result.inliers if result else None,
@@ -167,18 +168,19 @@ def run(args) -> int:
                 bar.update()
     errors = np.array([s['error_px'] for s in summary if s['error_px'] is not None])
     seconds = [s['seconds'] for s in summary if s['seconds'] is not None]
-    failed = sum(s['status'] != 'ok' for s in summary)
+    failed = sum(s['status'] is not RegistrationStatus.OK for s in summary)
     stats = {
         'pairs': len(summary),
         'failed': failed,
         'raised': sum(bool(s['failure']) for s in summary),
-        'unmeasured': sum(s['status'] == 'ok' and s['error_px'] is None for s in summary),
+        'unmeasured': sum(s['status'] is RegistrationStatus.OK and s['error_px'] is None for s in summary),
         'backend': backend.name,
         'error_px_median': float(np.median(errors)) if len(errors) else None,
         'error_px_max': float(np.max(errors)) if len(errors) else None,
         'seconds_median': float(np.median(seconds)) if seconds else None,
     }
-    atomic_write_text(out / 'summary.json', json.dumps({'stats': stats, 'pairs': summary}, indent=1))
+    pairs = [{**s, 'status': str(s['status'])} for s in summary]
+    atomic_write_text(out / 'summary.json', json.dumps({'stats': stats, 'pairs': pairs}, indent=1))
     print(
         f'registered {len(summary) - failed}/{len(summary)} images with {backend.name}; error vs stored '
         f'calibration: median {stats["error_px_median"]} px, max {stats["error_px_max"]} px '
