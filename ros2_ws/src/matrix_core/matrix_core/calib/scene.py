@@ -22,7 +22,6 @@ file; the real MATRIX sample's scene is ``site: matrix``, so its boards are defi
 Unknown keys are rejected so that a typo never silently falls back to a default.
 """
 
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -30,6 +29,7 @@ import numpy as np
 
 from matrix_core.calib.board import Checkerboard
 from matrix_core.geometry.camera import Camera, check_intrinsics
+from matrix_core.locations import package_share
 from matrix_core.settings import read_yaml
 
 CONFIG_PACKAGE = 'matrix_calib'
@@ -140,15 +140,8 @@ def scene_from_dict(data: dict, where: str = 'calibration config', folder=None) 
 
 
 def default_config_path(name: str = DEFAULT_CONFIG_NAME) -> Path:
-    """Path of a config shipped in ``matrix_calib/config`` (source tree, then every ament prefix)."""
-    candidates = [Path(__file__).resolve().parents[3] / CONFIG_PACKAGE / 'config' / name]
-    for prefix in os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep):
-        if prefix:
-            candidates.append(Path(prefix) / 'share' / CONFIG_PACKAGE / 'config' / name)
-    for path in candidates:
-        if path.is_file():
-            return path
-    raise FileNotFoundError(f'calibration config {name} not found in {[str(c) for c in candidates]}')
+    """Path of a config shipped in ``matrix_calib/config`` (installed under ``share/matrix_calib/config``)."""
+    return package_share(CONFIG_PACKAGE, 'config', name)
 
 
 def config_for_dataset(root) -> Path:

@@ -4,6 +4,8 @@ import platform
 import subprocess
 from pathlib import Path
 
+from matrix_core.locations import code_checkout
+
 
 def cpu_model() -> str:
     try:
@@ -36,7 +38,9 @@ def code_commit(repo: Path = None) -> dict:
     """``{'commit': full HEAD hash or None, 'dirty': bool, 'dirty_paths': [changed tracked files]}`` of the
     repository holding this code (or ``repo``): recorded with every finished step, so a report can tell
     which steps predate the code, or ran with local changes to the code they depend on."""
-    repo = Path(repo) if repo else Path(__file__).resolve().parents[5]
+    repo = Path(repo) if repo else code_checkout()
+    if repo is None:
+        return {'commit': None, 'dirty': False, 'dirty_paths': []}
     try:
         head = subprocess.run(
             ['git', '-C', str(repo), 'rev-parse', 'HEAD'], capture_output=True, text=True, check=True

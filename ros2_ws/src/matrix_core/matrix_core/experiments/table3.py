@@ -4,21 +4,21 @@ be read. Its images and annotation files do not correspond frame by frame (its R
 be scored on it; what it does check is the reader's geometry: every annotated ground position, projected
 with the reader's camera, should land on the bottom centre of that person's annotated box."""
 
-import os
 from pathlib import Path
 
 import numpy as np
+
+from matrix_core.locations import shared_dir
 
 IMAGE_SIZE = (1920, 1080)
 
 
 def shared_path(spec: str) -> Path:
-    """``shared:NAME`` -> ``$MATRIX_SHARED/NAME`` (default ``../shared`` beside the repository); other
-    strings are plain paths."""
+    """``shared:NAME`` -> ``$MATRIX_SHARED/NAME`` (:func:`matrix_core.locations.shared_dir`); other strings are
+    plain paths."""
     if not spec.startswith('shared:'):
         return Path(spec)
-    root = os.environ.get('MATRIX_SHARED') or str(Path(__file__).resolve().parents[5].parent / 'shared')
-    return Path(root) / spec.split(':', 1)[1]
+    return shared_dir() / spec.split(':', 1)[1]
 
 
 def _inside(box, width: int, height: int) -> bool:
