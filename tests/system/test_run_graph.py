@@ -194,14 +194,14 @@ def _check_live_view(watcher):
     assert {t.child_frame_id for t in last['/tf'].transforms} <= {f'{v}/camera_optical' for v in VIEWS}
 
 
-def test_bad_settings_fail_clearly(node_executable, tmp_path):
+def test_bad_settings_fail_clearly(matrix_sample, node_executable, tmp_path):
     run = subprocess.run(
         [
             str(node_executable('matrix_bringup', 'run_graph')),
             '--bag',
             str(tmp_path / 'none'),
             '--dataset',
-            str(tmp_path),
+            str(matrix_sample),  # a good dataset: the drones' references are read before the bag is opened
         ],
         capture_output=True,
         text=True,
