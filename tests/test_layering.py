@@ -53,6 +53,10 @@ ONE_HOME = {
     'homography validity (condition number)': (r'linalg\.cond\(', {'matrix_core/matrix_core/register/registration.py'}),
     'the MATRIX area': (r'-30\.0,\s*30\.0,\s*0\.0', set()),
     'the encoder stride': (r'(?i)stride\s*=\s*4\b', {'matrix_core/matrix_core/bev/encoder.py'}),
+    'a folder outside the package (matrix_core.locations)': (
+        r'parents\[\d+\]',
+        {'matrix_core/matrix_core/locations.py'},
+    ),
     'the reference image width': (
         r'[/*]\s*1920\b|\b1920(\.0)?\s*[/*]|=\s*1920\b',
         {'matrix_core/matrix_core/reference_size.py'},
@@ -77,6 +81,7 @@ def test_one_home_detector_sees_a_copy(tmp_path):
         'the MATRIX area': '[0.0, -30.0, 30.0, 0.0]',
         'the encoder stride': 'STRIDE = 4',
         'the reference image width': 'scale = width / 1920',
+        'a folder outside the package (matrix_core.locations)': "Path(__file__).resolve().parents[3] / 'config'",
     }
     for concept, text in samples.items():
         assert re.search(ONE_HOME[concept][0], text), concept
