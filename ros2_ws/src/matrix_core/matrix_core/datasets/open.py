@@ -29,8 +29,8 @@ def open_dataset(path):
         if markers[0] in names and ((root / markers[1]).is_dir() or (root / markers[1]).is_file()):
             return reader(root)
     raise DatasetError(
-        f'{root} is not a site dataset, MATRIX, Wildtrack or MultiviewX folder: expected site_dataset.json + '
-        f'site.yaml (site dataset), image_subsets/ + '
+        f'{root} is not a MATRIX, Wildtrack or MultiviewX folder or a site dataset: expected image_subsets/ + '
         f'calibrations/intrinsic/ (MATRIX), Image_subsets/ + calibrations/intrinsic_zero/ (Wildtrack) or '
-        f'Image_subsets/ + calibrations/intrinsic/ (MultiviewX); found {sorted(names)[:12]}'
+        f'Image_subsets/ + calibrations/intrinsic/ (MultiviewX) or site_dataset.json + site.yaml (site dataset); '
+        f'found {sorted(names)[:12]}'
     )
