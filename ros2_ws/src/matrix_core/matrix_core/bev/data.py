@@ -1,4 +1,5 @@
-"""Training/evaluation samples from any MATRIX-format folder (real or simulated) for the BEV network."""
+"""Training/evaluation samples from any MATRIX-format folder or site dataset (real or simulated) for the BEV
+network."""
 
 import cv2
 import numpy as np
