@@ -23,6 +23,7 @@ import yaml
 from matrix_core.calib.drone_calibrator import DroneCalibrator
 from matrix_core.calib.scene import CalibScene
 from matrix_core.calib.settings import CalibSettings
+from matrix_core.calib.status import CalibStatus
 from matrix_core.geometry.camera import Camera, pose_matrix
 from matrix_core.settings import read_yaml
 from matrix_core.site.load import SiteError, site_from_dict
@@ -187,8 +188,7 @@ def _rolled(camera: Camera):
 
 def _ok(result) -> bool:
     """A fresh pose from this image (the calibrator's status ok)."""
-    status = getattr(result.status, 'value', result.status)  # an enumeration, or its value in older code
-    return result.camera is not None and status == 'ok'
+    return result.camera is not None and result.status is CalibStatus.OK
 
 
 def calibrate_drone(drone: str, frames: DroneFrames, boards: list, prior: tuple = None) -> DroneReference:
