@@ -22,7 +22,6 @@ import time
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from matrix_msgs.msg import HomographyStamped, TrackArray
-from rclpy.executors import ExternalShutdownException
 from sensor_msgs.msg import CameraInfo, Image
 from std_msgs.msg import Header
 
@@ -36,7 +35,7 @@ from matrix_core.message_fields import (
     registration_from_msg,
     stamp_seconds,
 )
-from matrix_ros.executor import make_executor
+from matrix_ros.executor import make_executor, spin_until
 from matrix_ros.params import SettingsNode, declare_settings, parse_node_args
 from matrix_ros.qos import publisher_qos, qos_by_name
 
@@ -173,9 +172,10 @@ def main(argv=None) -> int:
     node, executor = GraphMonitor(cli), make_executor()
     executor.add_node(node)
     try:
-        while rclpy.ok() and not node.done:
-            executor.spin_once(timeout_sec=0.2)
-    except (KeyboardInterrupt, ExternalShutdownException):  # SIGINT, or SIGTERM through rclpy's handler
+        spin_until(executor, lambda: node.done, 0.2)
+    except KeyboardInterrupt:
+        pass
+    if not node.done:  # stopped by SIGINT or SIGTERM (rclpy's handlers): report what was seen
         node.finish()
     scored = getattr(node, 'scored', 0)
     executor.shutdown()

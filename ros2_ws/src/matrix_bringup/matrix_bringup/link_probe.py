@@ -15,13 +15,14 @@ import sys
 import time
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
+import rclpy.executors
 from diagnostic_msgs.msg import DiagnosticArray
 from matrix_msgs.msg import TrackArray
 from sensor_msgs.msg import CompressedImage
 
 from matrix_core import topics
 from matrix_core.message_fields import stamp_seconds
+from matrix_ros.executor import spin_until
 from matrix_ros.qos import qos_by_name
 
 
@@ -81,11 +82,14 @@ def main(argv=None) -> int:
                 qos_by_name(qos),
             )
     print(json.dumps({'kind': 'ready'}), flush=True)
+    executor = rclpy.executors.SingleThreadedExecutor()
+    executor.add_node(node)
     try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
+        spin_until(executor)  # SIGTERM and SIGINT through rclpy's handlers end it
+    except KeyboardInterrupt:
         pass
     finally:
+        executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
     return 0

@@ -10,11 +10,12 @@ import sys
 import time
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
+import rclpy.executors
 from std_msgs.msg import Header
 
 from matrix_core import topics
 from matrix_ros.conversions import seconds_to_stamp
+from matrix_ros.executor import spin_until
 from matrix_ros.qos import publisher_qos
 
 
@@ -25,17 +26,20 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     rclpy.init()
     node = rclpy.create_node('start_signal')
+    executor = rclpy.executors.SingleThreadedExecutor()
+    executor.add_node(node)
     pub = node.create_publisher(Header, topics.PLAYER_START_TOPIC, publisher_qos())
     try:
-        while pub.get_subscription_count() < args.players:
-            rclpy.spin_once(node, timeout_sec=0.1)
-        start_at = time.time() + args.lead
-        pub.publish(Header(stamp=seconds_to_stamp(start_at)))
-        print(f'{args.players} players ready; frame 0 at {start_at:.3f}', flush=True)
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
+        spin_until(executor, lambda: pub.get_subscription_count() >= args.players, 0.1)
+        if rclpy.ok():
+            start_at = time.time() + args.lead
+            pub.publish(Header(stamp=seconds_to_stamp(start_at)))
+            print(f'{args.players} players ready; frame 0 at {start_at:.3f}', flush=True)
+            spin_until(executor)  # SIGTERM and SIGINT through rclpy's handlers end it
+    except KeyboardInterrupt:
         pass
     finally:
+        executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
     return 0

@@ -36,7 +36,7 @@ from matrix_core.message_fields import stamp_seconds
 from matrix_core.site.parameter import check_bag_drones, named_site
 from matrix_ros.connect import SubscribersReady
 from matrix_ros.conversions import seconds_to_stamp
-from matrix_ros.executor import make_executor
+from matrix_ros.executor import make_executor, spin_until
 from matrix_ros.lockstep import LockstepWindow
 from matrix_ros.message_types import message_class
 from matrix_ros.params import SettingsNode, parse_node_args, declare_settings
@@ -178,7 +178,7 @@ def main(argv=None) -> int:
     try:
         played = node.play()
         if not node.settings.exit_when_done:
-            node.spinner.spin()
+            spin_until(node.spinner)
     except KeyboardInterrupt:
         played = 0
     finally:

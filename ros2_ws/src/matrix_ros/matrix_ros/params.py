@@ -22,13 +22,12 @@ from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
 from rclpy.utilities import remove_ros_args
 
 from matrix_core.settings import add_settings_arguments, settings_fields, settings_from_namespace
-from matrix_ros.executor import make_executor
+from matrix_ros.executor import make_executor, spin_until
 from matrix_ros.left_out import NoDroneCanStart
 from matrix_ros.site_parameter import check_site_views, site_defaults
 
 
 OWN_THREAD_DRAIN_S = 10.0  # at exit, longest a node's own thread goes on with the calls handed to it
-SPIN_TIMEOUT_S = 0.5  # longest wait for work before the stop flag is checked (0.1 s cost an idle node 0.7 % of a core)
 
 _PARAM_TYPES = {
     bool: ParameterType.PARAMETER_BOOL,
@@ -184,8 +183,11 @@ def parse_node_args(cls, argv=None, description: str = ''):
 def spin_node(node_factory, cls, argv=None, description: str = '', on_exit=None) -> int:
     """Standard node ``main``: CLI flags -> defaults, ``rclpy.init``, build the node, spin until SIGINT/SIGTERM.
 
-    Signals are handled here rather than by rclpy's handlers: a flag checked between short spins makes
-    the node stop (and ``on_exit(node)`` run, e.g. to close a bag) whenever the signal arrives.
+    SIGINT and SIGTERM stop the spinning here (``on_exit(node)`` then runs, e.g. to close a bag), with the
+    context still up: rclpy's own handlers would shut it down first, and a node on a thread of its own must
+    still make the calls handed to it (:func:`_spin_in_thread`). So rclpy is initialised without them
+    (``SignalHandlerOptions.NO``) and the two signals set a flag that :func:`matrix_ros.executor.spin_until`
+    checks between slices of spinning.
     """
     cli_settings, argv = parse_node_args(cls, argv, description)
     return _spin([lambda: node_factory(cli_settings)], argv, on_exit)
@@ -201,8 +203,8 @@ def spin_nodes(node_factories, argv=None, description: str = '') -> int:
 
 
 def _spin(node_factories, argv, on_exit=None) -> int:
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-    stop = []
+    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)  # see spin_node
+    stop = []  # appended to by the handlers: a list, not a threading.Event, whose lock a second signal could meet
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.append(True))
     nodes, executor, threads = [], make_executor(), []
@@ -214,8 +216,7 @@ def _spin(node_factories, argv, on_exit=None) -> int:
                 executor.add_node(nodes[-1])
             else:
                 threads.append(_spin_in_thread(nodes[-1], own, stop))
-        while not stop and rclpy.ok():
-            executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
+        spin_until(executor, lambda: bool(stop))
     except NoDroneCanStart as exc:  # bad input, not a bug: one line naming the drones, no traceback
         print(f'error: {exc}', file=sys.stderr)
         return 2
@@ -246,11 +247,9 @@ def _spin_in_thread(node, own, stop: list) -> threading.Thread:
         tid = threading.get_native_id()
         os.setpriority(os.PRIO_PROCESS, tid, min(19, os.getpriority(os.PRIO_PROCESS, tid) + own.niceness))
         try:
-            while not stop and rclpy.ok():
-                executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
+            spin_until(executor, lambda: bool(stop))
             deadline = time.monotonic() + OWN_THREAD_DRAIN_S
-            while own.waiting() and rclpy.ok() and time.monotonic() < deadline:
-                executor.spin_once(timeout_sec=0.1)
+            spin_until(executor, lambda: not own.waiting() or time.monotonic() >= deadline, 0.1)
         except BaseException as exc:  # the process stops and raises it, as it would on its main thread
             thread.error = exc
             stop.append(True)
