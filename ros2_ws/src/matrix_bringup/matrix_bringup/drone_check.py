@@ -5,6 +5,7 @@ the other drones, fuse and the recorder run without it, and the replay's end nam
 from dataclasses import replace
 
 from matrix_core.datasets import DatasetError, MatrixDataset
+from matrix_bringup.graph import graph_nodes
 from matrix_core.datasets.drone_inputs import left_out_text, unreadable_drones
 
 __all__ = ['LEFT_OUT_EXIT', 'left_out_text', 'ran_without_text', 'without_unreadable_drones']
@@ -15,13 +16,16 @@ LEFT_OUT_EXIT = 5  # run_graph's exit code when every frame played but some dron
 
 def without_unreadable_drones(settings) -> tuple:
     """(GraphSettings without the drones whose reference cannot be read, view -> why each was left out);
-    ValueError when no drone is left."""
+    ValueError on bad settings (``graph.graph_nodes``) and when no drone is left."""
     if not settings.dataset:
         raise ValueError('bag and dataset are required')
     try:
         dataset = MatrixDataset(settings.dataset)
     except DatasetError as exc:  # a settings error like any other: one line before anything starts
         raise ValueError(f'dataset: {exc}') from None
+    # then every other setting (the bag, the views it has, the site): a view named by mistake is a settings
+    # error, not a drone to leave out
+    graph_nodes(settings)
     left_out = unreadable_drones(dataset, settings.views)
     if not left_out:
         return settings, {}
