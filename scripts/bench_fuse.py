@@ -32,6 +32,7 @@ from sensor_msgs.msg import CompressedImage, Image
 from std_msgs.msg import Header
 from tqdm import tqdm
 
+from matrix_core import topics
 from matrix_core.geometry.homography import pixel_scale_homography
 from matrix_core.datasets import open_dataset
 from matrix_core.message_fields import stamp_seconds
@@ -48,15 +49,17 @@ class Feeder:
         self.executor.add_node(self.node)
         self.views, qos = list(dataset.views), qos_by_name('reliable')
         kind = Image if raw else CompressedImage
-        topic = '/{}/image_raw' if raw else '/{}/image/compressed'
-        self.img_pubs = {v: self.node.create_publisher(kind, topic.format(v), qos) for v in self.views}
+        self.img_pubs = {
+            v: self.node.create_publisher(kind, topics.image_topic(v, compressed=not raw), qos) for v in self.views
+        }
         self.hom_pubs = {
-            v: self.node.create_publisher(HomographyStamped, f'/{v}/homography', publisher_qos()) for v in self.views
+            v: self.node.create_publisher(HomographyStamped, topics.absolute(v, topics.HOMOGRAPHY), publisher_qos())
+            for v in self.views
         }
         self.received = {}  # stamp -> wall time the TrackArray arrived
-        self.node.create_subscription(TrackArray, '/tracks', self._on_tracks, 100)
+        self.node.create_subscription(TrackArray, topics.graph_topic(topics.TRACKS), self._on_tracks, 100)
         self.stages = []  # the fuse node's own timing per frame (its /diagnostics)
-        self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 100)
+        self.node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS_TOPIC, self._on_diag, 100)
         # encode once: the bench times the fuse node, not this script
         self.frames = []
         for f in tqdm(dataset.frames, desc='encode', unit='frame', leave=False):

@@ -50,12 +50,12 @@ from sensor_msgs.msg import CompressedImage, Image
 
 from matrix_bringup.graph import BagFacts, GraphSettings, graph_nodes
 from matrix_bringup.run_graph import Graph
+from matrix_core import topics
 from matrix_core.bags.clock import read_sequence_clock
 from matrix_core.message_fields import stamp_seconds
 from matrix_ros.qos import qos_by_name
 
 ROOT = Path(__file__).resolve().parent.parent
-RAW_IMAGE = 'sensor_msgs/msg/Image'
 SHOW_FRAMES = 10  # sequences up to this long print every frame's latency
 
 
@@ -106,7 +106,8 @@ class Probe:
         self.first_image, self.tracks, self.views_used, self.drone_done, self.raw_topics = {}, {}, {}, {}, set()
         self.calibrated = {}  # stamp -> arrival of each drone's calib status
         self.registered = {}  # stamp -> arrival of each drone's register status
-        kind, topic = (CompressedImage, f'/{view}/image/compressed') if compressed else (Image, f'/{view}/image_raw')
+        kind = CompressedImage if compressed else Image
+        topic = topics.image_topic(view, compressed)
         self.node.create_subscription(
             kind,
             topic,
@@ -115,12 +116,12 @@ class Probe:
         )
         self.node.create_subscription(
             TrackArray,
-            '/tracks',
+            topics.graph_topic(topics.TRACKS),
             lambda m: self.tracks.setdefault(stamp_seconds(m.header.stamp), time.monotonic()),
             qos_by_name('history', 100),
         )
         self.node.create_subscription(
-            DiagnosticArray, '/diagnostics', self._on_diagnostics, qos_by_name('history', 100)
+            DiagnosticArray, topics.DIAGNOSTICS_TOPIC, self._on_diagnostics, qos_by_name('history', 100)
         )
 
     def _on_diagnostics(self, msg):
@@ -142,7 +143,7 @@ class Probe:
         self.raw_topics |= {
             t
             for t, types in self.node.get_topic_names_and_types()  # published, not only subscribed
-            if RAW_IMAGE in types and self.node.count_publishers(t)
+            if topics.IMAGE_TYPE in types and self.node.count_publishers(t)
         }
 
 
@@ -236,7 +237,7 @@ def decode_costs(bag: Path, repeats: int = 20) -> str:
     from matrix_core.bags.reader import read_bag
     from matrix_core.message_fields import gray_image_from_msg, image_from_msg
 
-    msg = next(m.msg for m in read_bag(bag) if m.topic.endswith('/image/compressed'))
+    msg = next(m.msg for m in read_bag(bag) if m.topic.endswith('/' + topics.IMAGE_COMPRESSED))
     cv2.setNumThreads(1)
 
     def ms(work):

@@ -3,6 +3,7 @@ flags) plus the node's wiring."""
 
 from dataclasses import dataclass, field
 
+from matrix_core import topics
 from matrix_core.datasets.matrix_conventions import MATRIX_AREA
 from matrix_core.register.settings import RegisterSettings
 from matrix_core.settings import check_area
@@ -31,12 +32,12 @@ class RegisterNodeSettings(NodeSettings, RegisterSettings):
             'help': 'scene ground x_min y_min x_max y_max (internal world metres); overridden by reference_dataset'
         },
     )
-    image_topic: str = field(default='image_raw', metadata={'help': 'image stream under <view>/'})
+    image_topic: str = field(default=topics.IMAGE_RAW, metadata={'help': 'image stream under <view>/'})
     compressed: bool = field(
         default=False, metadata={'help': 'subscribe <V>/image/compressed (JPEG) instead of the raw image'}
     )
     camera_info_topic: str = field(
-        default='camera_info',
+        default=topics.CAMERA_INFO,
         metadata={'help': 'CameraInfo stream under <view>/ (used only without reference_dataset)'},
     )
 

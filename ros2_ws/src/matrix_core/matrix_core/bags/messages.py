@@ -8,6 +8,7 @@ import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
 from matrix_core import message_fields as fields
+from matrix_core import topics
 from matrix_core.geometry.camera import Camera, pose_matrix
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
@@ -15,7 +16,7 @@ _T = TYPESTORE.types
 
 
 def header(stamp_ns: int, frame_id: str):
-    return _T['std_msgs/msg/Header'](
+    return _T[topics.HEADER_TYPE](
         stamp=_T['builtin_interfaces/msg/Time'](
             sec=int(stamp_ns // 1_000_000_000), nanosec=int(stamp_ns % 1_000_000_000)
         ),
@@ -28,20 +29,18 @@ def image_msg(image: np.ndarray, hdr):
     if image.dtype != np.uint8 or image.ndim != 3 or image.shape[2] != 3:
         raise ValueError(f'expected (H, W, 3) uint8 BGR image, got {image.dtype} {image.shape}')
     f = fields.image_fields(image)
-    return _T['sensor_msgs/msg/Image'](header=hdr, **{**f, 'data': np.frombuffer(f['data'], np.uint8)})
+    return _T[topics.IMAGE_TYPE](header=hdr, **{**f, 'data': np.frombuffer(f['data'], np.uint8)})
 
 
 def compressed_msg(image: np.ndarray, hdr, quality: int = 95):
     f = fields.compressed_fields(image, 'jpeg', quality)
-    return _T['sensor_msgs/msg/CompressedImage'](
-        header=hdr, format=f['format'], data=np.frombuffer(f['data'], np.uint8)
-    )
+    return _T[topics.COMPRESSED_TYPE](header=hdr, format=f['format'], data=np.frombuffer(f['data'], np.uint8))
 
 
 def camera_info_msg(camera: Camera, hdr):
     """Camera -> CameraInfo with p = K [R | t] (world -> pixels)."""
     f = fields.camera_info_fields(camera)
-    return _T['sensor_msgs/msg/CameraInfo'](
+    return _T[topics.CAMERA_INFO_TYPE](
         header=hdr,
         height=f['height'],
         width=f['width'],
@@ -63,7 +62,7 @@ def _pose(T: np.ndarray):
 
 def pose_msg(camera: Camera, hdr):
     """Camera pose world_T_cam as geometry_msgs/PoseStamped."""
-    return _T['geometry_msgs/msg/PoseStamped'](header=hdr, pose=_pose(camera.world_T_cam))
+    return _T[topics.POSE_TYPE](header=hdr, pose=_pose(camera.world_T_cam))
 
 
 pose_to_matrix = fields.pose_matrix_from_msg  # geometry_msgs/Pose -> (4, 4)
@@ -75,6 +74,6 @@ def pedestrians_msg(positions: dict, hdr):
     poses = [_pose(pose_matrix(np.eye(3), np.asarray(positions[i], dtype=float))) for i in ids]
     layout = _T['std_msgs/msg/MultiArrayLayout'](dim=[], data_offset=0)
     return (
-        _T['geometry_msgs/msg/PoseArray'](header=hdr, poses=poses),
-        _T['std_msgs/msg/Int32MultiArray'](layout=layout, data=np.array(ids, dtype=np.int32)),
+        _T[topics.POSE_ARRAY_TYPE](header=hdr, poses=poses),
+        _T[topics.IDS_TYPE](layout=layout, data=np.array(ids, dtype=np.int32)),
     )

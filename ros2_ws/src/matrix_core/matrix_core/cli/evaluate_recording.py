@@ -27,6 +27,7 @@ from matrix_core.cli.argument_types import (
     non_negative_int,
     positive_float,
 )
+from matrix_core import topics
 from matrix_core.output_paths import add_overwrite_argument, atomic_path, atomic_write_text, check_output
 
 
@@ -36,9 +37,10 @@ def add_parser(subparsers) -> None:
     )
     p.add_argument('recording', help='recorder bag folder or MOT text file "frame id x y"')
     p.add_argument('--ground-truth', required=True, help='sequence bag with /ground_truth/pedestrians')
-    p.add_argument('--tracks-topic', default='/tracks', help='TrackArray topic of the tracks (default: /tracks)')
+    tracks, detections = topics.graph_topic(topics.TRACKS), topics.graph_topic(topics.DETECTIONS)
+    p.add_argument('--tracks-topic', default=tracks, help=f'TrackArray topic of the tracks (default: {tracks})')
     p.add_argument(
-        '--detections-topic', default='/detections', help='TrackArray topic of the detections (default: /detections)'
+        '--detections-topic', default=detections, help=f'TrackArray topic of the detections (default: {detections})'
     )
     p.add_argument(
         '--start-time', type=non_negative_float, help='stamp of frame 0, seconds (default: the sequence bag\'s)'
