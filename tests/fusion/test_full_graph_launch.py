@@ -129,8 +129,10 @@ def test_monitor_paces_lockstep_on_every_stage(settings):
     assert [n.label for n in separate][:2] == ['calib', 'register'] and separate[-1].parameters[
         'wait_for_subscribers'
     ] == 4
-    with pytest.raises(ValueError, match='no ground_truth'):
-        graph_nodes(settings(monitor=True), BagFacts(compressed=False, frames=7, has_ground_truth=False))
+    # a bag without ground truth: no evaluation, the graph runs without the monitor, lockstep on the tracks
+    blind = graph_nodes(settings(monitor=True), BagFacts(compressed=False, frames=7, has_ground_truth=False))
+    assert 'graph_monitor' not in [n.label for n in blind]
+    assert blind[-1].parameters['lockstep_topic'] == '/tracks' and blind[-1].parameters['wait_for_subscribers'] == 2
 
 
 def test_every_process_is_built_and_its_parameter_files_apply(node_executable, settings):

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from matrix_core import topics
 from matrix_core.fusion.image_boxes import ImageBoxSettings
 from matrix_core.fusion.settings import FuseSettings
+from matrix_core.site.parameter import site_references_field
 from matrix_ros.node_settings import NodeSettings
 
 
@@ -50,6 +51,7 @@ class FuseNodeSettings(NodeSettings, ImageBoxSettings, FuseSettings):
             'from homographies'
         },
     )
+    site_references: bool = site_references_field()
     geometry_qos: str = field(
         default='history',
         metadata={
@@ -71,6 +73,8 @@ class FuseNodeSettings(NodeSettings, ImageBoxSettings, FuseSettings):
     )
 
     def check(self) -> None:
+        if self.site_references and self.scene_dataset:
+            raise ValueError('give scene_dataset or site_references, not both')
         if self.geometry_qos not in GEOMETRY_QOS:
             raise ValueError(f'geometry_qos must be one of {", ".join(GEOMETRY_QOS)}, got {self.geometry_qos!r}')
 

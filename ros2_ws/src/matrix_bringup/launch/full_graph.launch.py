@@ -7,6 +7,7 @@ The processes and their parameters come from ``matrix_bringup.graph.graph_nodes`
 ``exit_at_end``: the replay ends by itself (``matrix_bringup.replay_end``).
 
     ros2 launch matrix_bringup full_graph.launch.py bag:=BAG dataset:=DIR [record:=OUT/recording] [monitor:=true]
+    ros2 launch matrix_bringup full_graph.launch.py bag:=BAG site:=SITE.yaml   (each drone's references: the site's)
 
 Make the bag with ``matrix-tracker bag DATASET --out BAG`` (or ``matrix-tracker simulate ... --bag``); score
 the recording with ``matrix-tracker evaluate-recording OUT/recording --ground-truth BAG``.
@@ -19,7 +20,7 @@ from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 
 from matrix_bringup.drone_check import left_out_text, without_unreadable_drones
-from matrix_bringup.graph import GraphSettings, graph_nodes
+from matrix_bringup.graph import GraphSettings, graph_nodes, monitor_skipped
 from matrix_bringup.replay_end import ReplayEnd
 from matrix_ros.launch_settings import declare_arguments, settings_from_launch
 
@@ -44,6 +45,8 @@ def _graph(context):
     )
     if left_out:
         actions.append(LogInfo(msg=f'full_graph: {left_out_text(left_out)}; the other drones run'))
+    if skipped := monitor_skipped(settings):
+        actions.append(LogInfo(msg=f'full_graph: {skipped}'))
     specs = graph_nodes(settings)
     nodes = {
         spec.label: Node(

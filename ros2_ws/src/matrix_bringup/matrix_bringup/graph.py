@@ -21,7 +21,6 @@ last stage, finishes a frame before the next frame's registrations take the core
 """
 
 import logging
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -61,11 +60,19 @@ class GraphSettings:
     dataset: str = field(
         default='',
         metadata={
-            'help': "the MATRIX-format folder the bag came from: its reference/ images and calibrations are "
-            "register's references and calib's first prior"
+            'help': "the dataset folder the bag came from (MATRIX format or a site dataset): its reference images and "
+            "calibrations are register's references and calib's first prior; empty: the site file's references "
+            '(a site with references: site init, a site dataset\'s site.yaml)'
         },
     )
     site: str = site_field()
+    remap: list[str] = field(
+        default_factory=list,
+        metadata={
+            'help': "the bag's topics renamed to the graph's, ROS remapping rules FROM:=TO of absolute names, e.g. "
+            '/cam_front/image:=/alpha/image_raw (the player publishes FROM on TO)'
+        },
+    )
     views: list[str] = field(
         default_factory=lambda: list(VIEWS), metadata={'help': "drones to run; default: the site's drones"}
     )
@@ -191,6 +198,7 @@ class GraphSettings:
             raise ValueError(f'drone_niceness must be in [0, 19], got {self.drone_niceness}')
         if self.sync_timeout <= 0 or self.lockstep_timeout <= 0 or self.rate <= 0 or self.lockstep_window < 1:
             raise ValueError('sync_timeout, lockstep_timeout and rate must be positive, lockstep_window >= 1')
+        topics.parse_remaps(self.remap)
 
 
 @dataclass
@@ -262,10 +270,22 @@ def share_file(package: str, *parts: str) -> str:
     return str(Path(get_package_share_directory(package), *parts))
 
 
+# A drone's recorded streams the player plays: its images and the ground truth. Others (a camera driver's
+# <drone>/camera_info, a recording's homography or pose) are the graph's own outputs and are not replayed.
+PLAYED_DRONE_STREAMS = (
+    topics.IMAGE_RAW,
+    topics.IMAGE_COMPRESSED,
+    topics.GROUND_TRUTH_CAMERA_INFO,
+    topics.GROUND_TRUTH_POSE,
+)
+GRAPH_OUTPUTS = (*RECORDED, topics.FRAME_DONE_TOPIC, '/clock')  # scene-wide topics a bag's copy of is not played
+
+
 @dataclass(frozen=True)
 class BagFacts:
-    """What the graph needs to know of the bag: image transport, frame count and the topics to play (the
-    chosen views' and the scene-wide ones; empty = all)."""
+    """What the graph needs to know of the bag: image transport, frame count and the topics to play (as the bag
+    names them: the chosen views' images and ground truth, and the scene-wide ones; empty = all), the names
+    after ``remap`` (:func:`matrix_core.topics.parse_remaps`)."""
 
     compressed: bool
     frames: int
@@ -274,12 +294,15 @@ class BagFacts:
     drones: tuple = ()  # every drone the bag's topics name (matrix_core.site.parameter.recorded_drones)
 
     @classmethod
-    def read(cls, bag: str, views) -> 'BagFacts':
+    def read(cls, bag: str, views, remap=()) -> 'BagFacts':
         if not (Path(bag) / 'metadata.yaml').is_file():
             raise FileNotFoundError(f'not a rosbag2 folder (no metadata.yaml): {bag!r}')
-        counts, damage = topic_counts(bag)  # a damaged bag: what it holds before the damage (the player plays
+        recorded, damage = topic_counts(bag)  # a damaged bag: what it holds before the damage (the player plays
         if damage:  # that and exits with code 4)
             _log.warning(f'{damage}: replaying the frames before the damage')
+        rules = topics.parse_remaps(remap)
+        named = {topics.remapped(n, rules): n for n in recorded}  # the graph's name -> the bag's
+        counts = {n: recorded[b] for n, b in named.items()}
         imaged = {
             n.split('/')[1] for n in counts if n.endswith(('/' + topics.IMAGE_RAW, '/' + topics.IMAGE_COMPRESSED))
         }
@@ -297,9 +320,18 @@ class BagFacts:
                 f'it has {sorted(n for n in counts if "image" in n)}'
             )
         gt = all(topics.camera_info_topic(v) in counts for v in views)
-        drone = [n.split('/')[1] for n in counts]  # '/D3/image_raw' -> 'D3'
-        played = tuple(sorted(n for n, d in zip(counts, drone) if d in views or not re.fullmatch(r'D\d+', d)))
-        return cls(bool(compressed), max(raw or compressed), gt, played, tuple(recorded_drones(counts)))
+        drones = recorded_drones(counts)
+        played = tuple(sorted(named[n] for n in counts if _played(n, views, drones)))
+        return cls(bool(compressed), max(raw or compressed), gt, played, tuple(drones))
+
+
+def _played(name: str, views, drones) -> bool:
+    """Whether the player plays the topic the graph names ``name``: a chosen view's images and ground truth,
+    and every scene-wide topic that is not one of the graph's outputs."""
+    drone, _, stream = name.strip('/').partition('/')
+    if drone in drones:
+        return drone in views and stream in PLAYED_DRONE_STREAMS
+    return name not in GRAPH_OUTPUTS
 
 
 def player_exit_text(code: int) -> str:
@@ -316,19 +348,21 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
     """The graph's processes, in start order (the player last: it waits for the others' subscriptions)."""
     from matrix_core.calib.scene import config_for_dataset
 
-    if not s.bag or not s.dataset:
-        raise ValueError('bag and dataset are required')
-    bag = bag or BagFacts.read(s.bag, s.views)
     site = named_site(s.site)  # before anything starts: a bad site file, drones the site lacks
+    check_sources(s, site)
+    bag = bag or BagFacts.read(s.bag, s.views, s.remap)
     check_drones(site, s.views, 'views')
     check_drones(site, bag.drones, f'bag {s.bag}')
-    if s.monitor and not bag.has_ground_truth:
-        raise ValueError(f'{s.bag} has no ground_truth/camera_info for every view: the monitor cannot score')
+    monitor = s.monitor and bag.has_ground_truth  # without ground truth: no scores (monitor_skipped says so)
     sim = {'use_sim_time': True}
     on_site = {'site': s.site}  # every node that takes the site: the same one
+    # without a dataset folder each drone's references are the site file's
+    references = {'site_references': not s.dataset}
+    matrix_scene = site.path == matrix_site().path and s.dataset
     calib = {
-        'config': s.calib_config or (str(config_for_dataset(s.dataset)) if site.path == matrix_site().path else ''),
+        'config': s.calib_config or (str(config_for_dataset(s.dataset)) if matrix_scene else ''),
         'prior_dataset': s.dataset,
+        **references,
         'qos': 'reliable',
         'compressed': bag.compressed,
         'use_registration': s.calib_registration,
@@ -337,7 +371,7 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
     }
     if s.calib_registration and s.lockstep:  # as the fuse node: wait as long as the player, deterministic
         calib['registration_wait_s'] = s.lockstep_timeout
-    register = {'reference_dataset': s.dataset, 'compressed': bag.compressed, **on_site, **sim}
+    register = {'reference_dataset': s.dataset, **references, 'compressed': bag.compressed, **on_site, **sim}
     register_files = [s.register_params or share_file('matrix_register', 'config', 'register.yaml')]
     size = s.drones_per_process or len(s.views)
     groups = [list(s.views[i : i + size]) for i in range(0, len(s.views), size)]
@@ -381,6 +415,7 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
         'image_kind': 'compressed' if bag.compressed else 'raw',
         'sync_timeout': s.lockstep_timeout if s.lockstep else s.sync_timeout,
         'scene_dataset': s.dataset,
+        **references,
         **({'overlay': True} if s.overlay or s.live_view else {}),
         **({'checkpoint': s.checkpoint} if s.checkpoint else {}),
         **on_site,
@@ -425,7 +460,7 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
                 },
             )
         )
-    if s.monitor:
+    if monitor:
         nodes.append(
             NodeSpec(
                 'matrix_bringup',
@@ -442,7 +477,7 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
             )
         )
     # Every image topic is read by calib and register (or drone) and fuse (the monitor reads raw images too).
-    readers = (2 if s.drone_process else 3) + (1 if s.monitor and not bag.compressed else 0)
+    readers = (2 if s.drone_process else 3) + (1 if monitor and not bag.compressed else 0)
     player = {
         'bag': s.bag,
         'rate': s.rate,
@@ -454,7 +489,41 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
         **on_site,
     }
     if s.lockstep:
-        done = topics.FRAME_DONE_TOPIC if s.monitor else topics.graph_topic(topics.TRACKS)
+        done = topics.FRAME_DONE_TOPIC if monitor else topics.graph_topic(topics.TRACKS)
         player.update({'lockstep_topic': done, 'lockstep_type': topics.topic_type(done)})
-    nodes.append(NodeSpec('matrix_ros', 'bag_player', 'bag_player', '', player))
+    nodes.append(NodeSpec('matrix_ros', 'bag_player', 'bag_player', '', player, remaps=topics.parse_remaps(s.remap)))
     return nodes
+
+
+def check_sources(s: GraphSettings, site) -> None:
+    """ValueError, before anything starts, when the graph has no bag, or neither a dataset folder nor a site
+    with references (``references.source: files``) to take each drone's references from."""
+    from matrix_core.site.schema import ReferenceSource
+
+    if not s.bag:
+        raise ValueError('bag is required')
+    if not s.dataset and site.references is ReferenceSource.SIMULATE:
+        raise ValueError(
+            f'dataset is required: site {site.name} ({site.path}) has no references (references.source: simulate); '
+            f'give the dataset folder the bag came from, or the site.yaml of a site dataset or of site init'
+        )
+
+
+def monitor_skipped(s: GraphSettings, bag: BagFacts = None) -> str:
+    """Why ``monitor`` runs no evaluation on this bag ('' when it does, or was not asked for): the bag holds no
+    ground truth (``<drone>/ground_truth/camera_info``) for every view; the graph then runs without it."""
+    if not s.monitor:
+        return ''
+    bag = bag or BagFacts.read(s.bag, s.views, s.remap)
+    if bag.has_ground_truth:
+        return ''
+    lacking = [v for v in s.views if topics.camera_info_topic(v) not in _graph_names(s)]
+    return (
+        f'evaluation skipped: {s.bag} has no ground truth ({topics.GROUND_TRUTH_CAMERA_INFO}) of '
+        f'{", ".join(lacking)}; the graph runs without graph_monitor scores'
+    )
+
+
+def _graph_names(s: GraphSettings) -> set:
+    rules = topics.parse_remaps(s.remap)
+    return {topics.remapped(n, rules) for n in topic_counts(s.bag)[0]}

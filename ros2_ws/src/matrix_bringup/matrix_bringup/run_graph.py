@@ -14,6 +14,7 @@ and processed but a drone was left out at start (its reference image or calibrat
 ``drone_check``; the others run, and the exit message names it), 2 on bad settings, 130 on Ctrl-C.
 
     run_graph --bag BAG --dataset DIR [--record OUT/recording] [--monitor] [--drones_per_process 4] ...
+    run_graph --bag BAG --site SITE.yaml [--remap /cam/image:=/alpha/image_raw ...]   (the site's references)
 """
 
 import argparse
@@ -26,7 +27,7 @@ import time
 from pathlib import Path
 
 from matrix_bringup.drone_check import LEFT_OUT_EXIT, left_out_text, ran_without_text, without_unreadable_drones
-from matrix_bringup.graph import GraphSettings, NodeSpec, graph_nodes, player_exit_text
+from matrix_bringup.graph import GraphSettings, NodeSpec, graph_nodes, monitor_skipped, player_exit_text
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
 
 _PR_SET_PDEATHSIG = 1
@@ -107,6 +108,8 @@ def run(settings: GraphSettings, log_dir: Path, stop_timeout: float = 10.0, echo
     settings, left_out = without_unreadable_drones(settings)
     if left_out:
         echo(f'run_graph: {left_out_text(left_out)}; the other drones run')
+    if skipped := monitor_skipped(settings):
+        echo(f'run_graph: {skipped}')
     specs = graph_nodes(settings)
     graph = Graph(log_dir, settings.dds_profile)
     player, monitor = specs[-1].label, next((s.label for s in specs if s.executable == 'graph_monitor'), None)

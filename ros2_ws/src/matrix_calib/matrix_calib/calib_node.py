@@ -7,7 +7,9 @@ whose implied camera predicts the boards (else the image motion does). With regi
 (``matrix_ros.drone_link``; calib on its own thread) both come from register, the image decoded once. Publishes
 ``V/camera_info`` (``p = K [R | t]``), ``V/pose`` (also on ``/tf``: world -> the image's optical frame), a
 ``calib/V`` status per image on ``/diagnostics``, stamped as the image (stale: the last good pose,
-``publish_stale``); bad input is reported, the node keeps running. A drone whose ``prior_dataset`` reference
+``publish_stale``); bad input is reported, the node keeps running. Without ``config`` the site's boards and
+each drone's own camera (``matrix_core.site.calib_scene``). A drone whose ``prior_dataset`` reference (with
+``site_references``: the site file's)
 cannot be read is left out at start, logged and reported (``calib/V/start_up``, ``matrix_ros.left_out``); the
 others are served, and the node exits when none is left.
 """
@@ -27,11 +29,12 @@ from matrix_core.calib.prior import initial_prior
 from matrix_core.calib.scene import load_scene
 from matrix_core.calib.drone_calibrator import DroneCalibrator
 from matrix_core.calib.status import CalibStatus
-from matrix_core.datasets import DatasetError, MatrixDataset
-from matrix_core.datasets.drone_inputs import unreadable_drones
+from matrix_core.datasets import DatasetError
+from matrix_core.datasets.drone_inputs import open_references, unreadable_drones
 from matrix_core.geometry.camera import check_intrinsics
 from matrix_core.site.calib_scene import site_calib_scene
 from matrix_core.site.parameter import named_site
+from matrix_core.site.shipped import matrix_site
 from matrix_core.sync import FrameSynchronizer, FrameSyncSettings
 from matrix_ros import diagnostics
 from matrix_ros.connect import SubscribeWhenConnected
@@ -53,9 +56,13 @@ class CalibNode(SettingsNode):
         self.settings = s = declare_settings(self, CalibNodeSettings, defaults, shared=self.link.parameters)
         s.apply_threads()
         self.own_thread = self.link.own_thread(self, s.thread_niceness)  # then spin_nodes spins it on its own thread
-        # no config: the boards (and the shared camera) of the site; for MATRIX the shipped real-sample scene
-        self.scene = load_scene(s.config) if s.config else site_calib_scene(named_site(s.site))
-        reference = MatrixDataset(s.prior_dataset) if s.prior_dataset else None
+        # no config: the boards of the site and each drone's own camera; for MATRIX the shipped real-sample scene
+        site = named_site(s.site)
+        self.scene = (
+            load_scene(s.config) if s.config else site_calib_scene(site) if site.path == matrix_site().path else None
+        )
+        self.scenes = {}  # view -> its scene
+        reference = open_references(s.prior_dataset, site if s.site_references else None)
         self.calibrators, self.pubs, self.syncs, self.connections = {}, {}, {}, {}
         self.diag_pub = self.create_publisher(diagnostics.DiagnosticArray, topics.DIAGNOSTICS_TOPIC, publisher_qos())
         self.tf_pub = self.create_publisher(TFMessage, topics.TF_TOPIC, publisher_qos('reliable', 100))
@@ -63,7 +70,8 @@ class CalibNode(SettingsNode):
         # a drone whose reference prior cannot be read is left out and reported; the others are served
         left_out = unreadable_drones(reference, [v for v, _ in hosted]) if reference and reference.has_reference else {}
         for view, prefix in served_drones(self, hosted, left_out):
-            self.calibrators[view] = DroneCalibrator(self.scene, s, *self._prior(view, reference))
+            self.scenes[view] = scene = self.scene or site_calib_scene(site, site.drone(view))
+            self.calibrators[view] = DroneCalibrator(scene, s, *self._prior(view, reference))
             self.pubs[view] = (
                 self.create_publisher(CameraInfo, topics.drone_topic(prefix, topics.CAMERA_INFO), publisher_qos()),
                 self.create_publisher(PoseStamped, topics.drone_topic(prefix, topics.POSE), publisher_qos()),
@@ -80,8 +88,9 @@ class CalibNode(SettingsNode):
         if s.use_registration:  # waits on the wall clock (sim time stops in lockstep), checked to 5 % of their length
             period = min(1.0, max(0.05, s.registration_wait_s / 20))  # (20 Hz cost an idle node 3.6 % of a core)
             self.create_timer(period, self._poll, clock=Clock(clock_type=ClockType.STEADY_TIME))
+        boards = len(self.scene.boards if self.scene else site.boards)
         self.get_logger().info(
-            f'calibrating {sorted(self.calibrators)} with {len(self.scene.boards)} boards'
+            f'calibrating {sorted(self.calibrators)} with {boards} boards'
             + (', guided by their registrations' if s.use_registration else '')
         )
 
@@ -114,7 +123,7 @@ class CalibNode(SettingsNode):
 
     def _prior(self, view, reference) -> tuple:
         try:
-            return initial_prior(self.scene, view, reference)
+            return initial_prior(self.scenes[view], view, reference)
         except DatasetError as exc:
             self.get_logger().error(f'{view}: {exc}; every frame will be reported failed')
         return None, None

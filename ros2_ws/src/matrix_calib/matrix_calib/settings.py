@@ -4,6 +4,7 @@ flags) plus the node's wiring."""
 from dataclasses import dataclass, field
 
 from matrix_core.calib.settings import CalibSettings
+from matrix_core.site.parameter import site_references_field
 from matrix_core.topics import WORLD_FRAME
 from matrix_ros.node_settings import NodeSettings
 
@@ -64,7 +65,11 @@ class CalibNodeSettings(NodeSettings, CalibSettings):
         },
     )
 
+    site_references: bool = site_references_field()
+
     def check(self) -> None:
+        if self.site_references and self.prior_dataset:
+            raise ValueError('give prior_dataset or site_references, not both')
         if self.registration_wait_s <= 0:
             raise ValueError('registration_wait_s must be positive')
         if self.thread_niceness < -1:

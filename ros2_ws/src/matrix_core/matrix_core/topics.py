@@ -151,3 +151,24 @@ def pose_topic(view: str) -> str:
 
 def optical_frame(view: str) -> str:
     return f'{view}/camera_optical'
+
+
+def parse_remaps(rules) -> dict:
+    """ROS remapping rules ``FROM:=TO`` of absolute topic names (a recording's names -> the graph's, e.g.
+    ``/cam_front/image:=/alpha/image_raw``) as a dict; ValueError naming a malformed rule."""
+    out = {}
+    for rule in rules:
+        src, sep, dst = str(rule).partition(':=')
+        if not sep or not src.startswith('/') or not dst.startswith('/') or ':=' in dst:
+            raise ValueError(
+                f'remap rule {rule!r}: expected FROM:=TO, two absolute topic names (/cam/image:=/a/image_raw)'
+            )
+        if src in out:
+            raise ValueError(f'remap rule {rule!r}: {src} is remapped twice')
+        out[src] = dst
+    return out
+
+
+def remapped(name: str, remaps: dict) -> str:
+    """``name`` as the remapping rules (:func:`parse_remaps`) rename it (exact names, as ROS matches them)."""
+    return remaps.get(name, name)

@@ -9,7 +9,8 @@ Per view ``V`` in ``views`` (several drones per process), relative topics (``mat
   registration.Registration``, the image's stamp) and ``/diagnostics`` (confidence, inliers, reference, ...).
 
 Reference: ``reference_dataset``'s ``reference/`` image and calibration of ``V`` (its
-``matrix_tracker_meta.json`` also gives the obstacles, see ``matrix_core.register.scene``), or else the first
+``matrix_tracker_meta.json`` also gives the obstacles, see ``matrix_core.register.scene``), with
+``site_references`` the site file's (``matrix_core.datasets.drone_inputs.open_references``), or else the first
 image whose CameraInfo (``p = K [R | t]``) has the SAME stamp (``matrix_core.register.reference_pairing``). A
 drone whose reference cannot be read is left out at start, logged and reported on ``/diagnostics``
 (``register/V/start_up``, ``matrix_ros.left_out``); the others are served, and the node exits when none is left.
@@ -22,14 +23,14 @@ from matrix_msgs.msg import HomographyStamped
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
 from matrix_core import topics
-from matrix_core.datasets import MatrixDataset
-from matrix_core.datasets.drone_inputs import unreadable_drones
+from matrix_core.datasets.drone_inputs import open_references, unreadable_drones
 from matrix_core.register.backends import make_backend
 from matrix_core.register.reference_pairing import FAIL, HOLD, REFERENCE, ReferencePairing, stamp_text
 from matrix_core.register.registrar import Registrar
 from matrix_core.register.registration import Registration, RegistrationStatus
 from matrix_core.register.scene import settings_for_dataset
 from matrix_core.register.warm_up import warm_up_once
+from matrix_core.site.parameter import named_site
 from matrix_register.settings import RegisterNodeSettings
 from matrix_ros import diagnostics
 from matrix_ros.connect import SubscribeWhenConnected
@@ -52,7 +53,8 @@ class RegisterNode(SettingsNode):
         self.backend = make_backend(s)
         self.registrars, self.pubs, self.connections, self.pairing = {}, {}, {}, {}
         self.area = tuple(s.area)
-        self.dataset = dataset = MatrixDataset(s.reference_dataset) if s.reference_dataset else None
+        site = named_site(s.site) if s.site_references else None
+        self.dataset = dataset = open_references(s.reference_dataset, site)
         self.restarts = DroneRestarts(self, s.restart_gap_s, self._start_drone)
         if dataset is not None:
             self.area = dataset.area
@@ -73,7 +75,7 @@ class RegisterNode(SettingsNode):
         self.left_out = LeftOutReport(self, left_out, self.diag_pub)
         self.get_logger().info(
             f'registering {list(self.pubs)} with backend {self.backend.name} at scale {s.scale}; '
-            f'reference: {s.reference_dataset or "first frame with CameraInfo"}'
+            f'reference: {dataset.root if dataset is not None else "first frame with CameraInfo"}'
         )
 
     def _subscribe_view(self, view: str, prefix: str, needs_camera_info: bool) -> None:

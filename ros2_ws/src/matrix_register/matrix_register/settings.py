@@ -7,6 +7,7 @@ from matrix_core import topics
 from matrix_core.datasets.matrix_conventions import MATRIX_AREA
 from matrix_core.register.settings import RegisterSettings
 from matrix_core.settings import check_area
+from matrix_core.site.parameter import site_references_field
 from matrix_ros.node_settings import NodeSettings
 
 
@@ -26,6 +27,7 @@ class RegisterNodeSettings(NodeSettings, RegisterSettings):
             'the first frame with a CameraInfo becomes the reference'
         },
     )
+    site_references: bool = site_references_field()
     area: list[float] = field(
         default_factory=lambda: list(MATRIX_AREA),
         metadata={
@@ -43,3 +45,5 @@ class RegisterNodeSettings(NodeSettings, RegisterSettings):
 
     def check(self) -> None:
         check_area(self.area)
+        if self.site_references and self.reference_dataset:
+            raise ValueError('give reference_dataset or site_references, not both')

@@ -1,6 +1,7 @@
 """``bag_player``: publish a rosbag2 (MCAP or SQLite) into the live graph, with ``/clock``.
 
-Messages are published exactly as recorded (serialized bytes, no re-encoding) on their recorded topics.
+Messages are published exactly as recorded (serialized bytes, no re-encoding) on their recorded topics, which
+ROS remapping rules rename (``--ros-args -r /cam_front/image:=/alpha/image_raw``).
 Messages with the same bag time form one frame. Two pacings:
 
 - ``rate``: frames follow the recorded timing scaled by ``rate`` (2.0 = twice as fast);
@@ -52,7 +53,8 @@ class BagPlayer(SettingsNode):
             raise FileNotFoundError(f'not a rosbag2 folder (no metadata.yaml): {s.bag}')
         self.sequence_clock = read_sequence_clock(s.bag, note=self.get_logger().warning)
         recorded = connections(s.bag)
-        check_bag_drones(named_site(s.site), recorded, s.bag)  # another site's recording: refused before playing
+        # another site's recording is refused before playing; the names as published (after -r FROM:=TO rules)
+        check_bag_drones(named_site(s.site), [self.resolve_topic_name(t) for t in recorded], s.bag)
         self.topics = {t: msgtype for t, msgtype in recorded.items() if not s.topics or t in s.topics}
         self.damage = ''  # why the bag could not be played to its end ('' when it was)
         qos = publisher_qos(s.qos)

@@ -10,8 +10,10 @@ from std_msgs.msg import Header
 from vision_msgs.msg import Detection2DArray as VisionDetection2DArray
 
 from matrix_core import topics
+from matrix_core.datasets.drone_inputs import open_references
 from matrix_core.fusion.image_outputs import ViewCameras
 from matrix_core.message_fields import ConversionError, image_from_msg
+from matrix_core.site.parameter import named_site
 from matrix_ros import diagnostics
 from matrix_ros import fusion_messages as out
 from matrix_ros import vision_messages as vm
@@ -25,7 +27,12 @@ class ImageOutputs:
 
     def __init__(self, node, settings):
         s, self.node = settings, node
-        self.cameras = ViewCameras.from_dataset(s, s.scene_dataset, s.views) if s.scene_dataset else ViewCameras(s)
+        if s.scene_dataset:
+            self.cameras = ViewCameras.from_dataset(s, s.scene_dataset, s.views)
+        elif s.site_references:  # the site file's references: the intrinsics of each drone's reference
+            self.cameras = ViewCameras.from_references(s, open_references(site=named_site(s.site)), s.views)
+        else:
+            self.cameras = ViewCameras(s)
         qos = publisher_qos()
         self.boxes = (
             {v: node.create_publisher(Detection2DArray, s.topic(s.detections_2d_topic, v), qos) for v in s.views}
@@ -42,7 +49,9 @@ class ImageOutputs:
             else {}
         )
         if self.boxes and s.input_kind == 'homography' and not self.cameras.intrinsics and not self.cameras.unavailable:
-            node.get_logger().warning('no detections_2d from homographies: scene_dataset (the intrinsics) is not set')
+            node.get_logger().warning(
+                'no detections_2d from homographies: neither scene_dataset nor site_references gives the intrinsics'
+            )
         # A view whose reference cannot be read is still fused; only its boxes from homographies need the
         # reference's intrinsics. Said once here, and in every frame's diagnostics (``statuses``).
         consequence = 'no image boxes' if self.boxes and s.input_kind == 'homography' else 'reference unusable'

@@ -38,9 +38,15 @@ class ViewCameras:
         """Intrinsics from ``root``'s reference calibrations (those it has), obstacles from its meta. A view
         whose reference cannot be read gets no boxes (``unavailable`` says why); the others do."""
         from matrix_core.datasets.open import open_dataset
+
+        return cls.from_references(settings, open_dataset(root), views)
+
+    @classmethod
+    def from_references(cls, settings: ImageBoxSettings, dataset, views) -> 'ViewCameras':
+        """As :meth:`from_dataset`, from a source of references (``datasets.drone_inputs.open_references``: a
+        dataset folder's, or a site file's)."""
         from matrix_core.datasets.types import DatasetError
 
-        dataset = open_dataset(root)
         intrinsics, unavailable = {}, {}
         if getattr(dataset, 'has_reference', False):
             for v in views:

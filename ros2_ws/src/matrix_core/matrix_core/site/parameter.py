@@ -38,6 +38,18 @@ def site_field():
     return field(default=MATRIX_SITE, metadata={'help': SITE_HELP.format(shipped=', '.join(shipped_sites()))})
 
 
+SITE_REFERENCES_HELP = (
+    "each drone's reference image and calibration are those the site file names (its references), for a site "
+    'without a dataset folder beside it (matrix-tracker site init, a site dataset); the node\'s dataset folder '
+    'parameter must then be empty'
+)
+
+
+def site_references_field():
+    """The ``site_references`` field of a node's settings (register, calib, fuse: one meaning in each)."""
+    return field(default=False, metadata={'help': SITE_REFERENCES_HELP})
+
+
 @dataclass
 class SiteSettings(Settings):
     """The site a component works on (module docstring)."""

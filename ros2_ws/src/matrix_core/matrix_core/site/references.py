@@ -131,3 +131,67 @@ def require_references(site: Site) -> None:
                 f'camera.image_size is {drone.camera.image_size[0]}x{drone.camera.image_size[1]}'
             )
         reference_camera(site, drone)
+
+
+class SiteReferences:
+    """A site's references read the way the nodes read a dataset folder's (``reference_image``,
+    ``reference_camera``, ``has_reference``, ``views``, ``area``, ``root``), so that a site file is a node's
+    source of references without any dataset folder beside it (``datasets.drone_inputs.open_references``).
+    A drone's unreadable file is a :class:`~matrix_core.datasets.types.DatasetError` naming the drone and the
+    file, as a folder's would be."""
+
+    meta = None  # a site states its obstacles in the site file, not in a dataset's meta
+
+    def __init__(self, site: Site):
+        if site.references is ReferenceSource.SIMULATE:
+            raise SiteError(
+                f'{site.path}: references.source: simulate: this site has no reference images or calibrations '
+                f'yet (matrix-tracker simulate --site writes a site dataset whose site.yaml has them)'
+            )
+        self.site = site
+        self.root = site.path
+
+    @property
+    def views(self) -> tuple:
+        return self.site.drone_names
+
+    @property
+    def area(self) -> tuple:
+        return self.site.area
+
+    @property
+    def has_reference(self) -> bool:
+        return True
+
+    def _drone(self, view: str) -> DroneSpec:
+        from matrix_core.datasets.types import DatasetError
+
+        if view not in self.site.drone_names:
+            raise DatasetError(f'{self.site.path}: no drone {view!r} (its drones: {", ".join(self.site.drone_names)})')
+        return self.site.drone(view)
+
+    def reference_image(self, view: str):
+        """(H, W, 3) BGR reference image of ``view``, checked to have its camera's image size."""
+        from matrix_core.datasets.base import read_image
+        from matrix_core.datasets.types import DatasetError
+
+        drone = self._drone(view)
+        try:
+            image = read_image(resolve(self.site, drone.reference.image))
+        except SiteError as exc:
+            raise DatasetError(str(exc)) from None
+        size = (image.shape[1], image.shape[0])
+        if size != tuple(drone.camera.image_size):
+            raise DatasetError(
+                f'{self.site.path}: {_key(self.site, view)}.reference.image is {size[0]}x{size[1]}, '
+                f'camera.image_size is {drone.camera.image_size[0]}x{drone.camera.image_size[1]}'
+            )
+        return image
+
+    def reference_camera(self, view: str) -> Camera:
+        from matrix_core.datasets.types import DatasetError
+
+        try:
+            return reference_camera(self.site, self._drone(view))
+        except SiteError as exc:
+            raise DatasetError(str(exc)) from None
