@@ -85,14 +85,15 @@ class BagPlayer(SettingsNode):
             self.spinner.spin_once(timeout_sec=min(0.05, max(0.0, deadline - time.monotonic())))
 
     def _start_time(self, topic: str) -> float:
-        """The wall time the first frame is due: the stamp of the one Header on ``topic`` (0 if stopped first)."""
+        """The wall time the first frame is due: the stamp of the first Header on ``topic`` (0 if stopped first).
+        The subscription is made now, once ready (its match is what says so), and kept: destroying an entity
+        under rclpy's EventsExecutor is what its shutdown was once seen to hang on."""
         got = []
-        sub = self.create_subscription(
+        self.start_sub = self.create_subscription(
             Header, topic, lambda msg: got.append(stamp_seconds(msg.stamp)), qos_by_name('history', 1)
         )
         self.get_logger().info(f'ready; waiting for the start time on {topic}')
         self._spin_for(math.inf, lambda: bool(got))
-        self.destroy_subscription(sub)
         return got[0] if got else 0.0
 
     def frames(self):
