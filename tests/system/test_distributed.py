@@ -47,7 +47,8 @@ def _wait(condition, timeout_s, what, procs):
     while not condition():
         dead = {label: p.returncode for label, p in procs.items() if p.poll() not in (None, 0)}
         assert not dead, f'{dead} exited while waiting for {what}'
-        assert time.monotonic() < deadline, f'after {timeout_s} s still waiting for {what}'
+        running = sorted(label for label, p in procs.items() if p.poll() is None)
+        assert time.monotonic() < deadline, f'after {timeout_s} s still waiting for {what}; running: {running}'
         time.sleep(0.1)
 
 
