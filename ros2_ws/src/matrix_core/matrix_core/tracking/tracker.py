@@ -56,15 +56,21 @@ class BevTracker:
             tr.mean, tr.cov = self.kf.predict(tr.mean, tr.cov)
         high = np.flatnonzero(dets.scores >= s.high_score)
         low = np.flatnonzero((dets.scores >= s.low_score) & (dets.scores < s.high_score))
-        # Stage 1: confident detections with every track (confirmed ones listed first break ties).
-        order = sorted(range(len(self.tracks)), key=lambda k: not self.tracks[k].confirmed)
-        pool = [self.tracks[k] for k in order]
-        pairs, left_t, left_d = associate(pool, dets, high, s.use_offsets, s.gate_m, s.gate_growth_m)
-        matched = [(pool[i], j) for i, j in pairs]
+        gates = (s.gate_m, s.gate_growth_m, s.max_gate_m)
+        confirmed = [tr for tr in self.tracks if tr.confirmed]
+        tentative = [tr for tr in self.tracks if not tr.confirmed]
+        # Stage 1: confident detections with the confirmed tracks, tracked or lost (a lost track found again
+        # within its grown gate keeps its id).
+        pairs, left_t, left_d = associate(confirmed, dets, high, s.use_offsets, *gates)
+        matched = [(confirmed[i], j) for i, j in pairs]
+        rest = [confirmed[i] for i in left_t]
         # Stage 2: weak detections only extend confirmed tracks (ByteTrack's recovery of occluded people).
-        rest = [pool[i] for i in left_t if pool[i].confirmed]
-        pairs2, _, _ = associate(rest, dets, low, s.use_offsets, s.gate_m, s.gate_growth_m)
+        pairs2, _, _ = associate(rest, dets, low, s.use_offsets, *gates)
         matched += [(rest[i], j) for i, j in pairs2]
+        # Stage 3: the confident detections left with the tentative tracks, so that a track started by a
+        # false positive never takes a person's detection from that person's track.
+        pairs3, _, left_d = associate(tentative, dets, left_d, s.use_offsets, *gates)
+        matched += [(tentative[i], j) for i, j in pairs3]
 
         hit = set()
         for tr, j in matched:
