@@ -36,6 +36,11 @@ def test_perfect_estimates_score_zero_and_shifts_are_measured(ds):
     assert ground_homography_error_m(moved.ground_H_img(), truth, ds.area) == pytest.approx(0.3, abs=1e-6)
     bad = score_view_frame('D2', 1.5, truth, ds.area, moved, RegistrationStatus.FAILED, 0.1, None, 'too few inliers')
     assert bad.centre_err_m == pytest.approx(0.3) and bad.reg_ground_err_m is None
+    # the registration's status and message go to their own columns (graph_scores.csv), not into a pose error
+    assert perfect.reg_status == RegistrationStatus.OK and bad.reg_status == RegistrationStatus.FAILED
+    assert bad.reg_message == 'too few inliers'
+    unposed = score_view_frame('D2', 1.5, truth, ds.area, None, RegistrationStatus.OK, 0.9, truth.ground_H_img())
+    assert unposed.rot_err_deg is None and unposed.reg_status == RegistrationStatus.OK
 
 
 def test_summary_table_and_picture(ds):

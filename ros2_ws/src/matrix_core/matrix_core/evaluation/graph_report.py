@@ -55,7 +55,7 @@ def score_view_frame(
     reg_message: str = None,
 ) -> ViewFrameScore:
     """Score what was published for ``view`` at ``stamp`` against the ``truth`` camera."""
-    score = ViewFrameScore(view, stamp, reg_status, reg_message=reg_message, reg_confidence=reg_confidence)
+    score = ViewFrameScore(view, stamp, reg_status=reg_status, reg_message=reg_message, reg_confidence=reg_confidence)
     if estimated is not None:
         score.rot_err_deg, score.centre_err_m = pose_errors(estimated, truth)
     if reg_status == RegistrationStatus.OK and ground_H_img is not None:
