@@ -350,7 +350,10 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
 
     site = named_site(s.site)  # before anything starts: a bad site file, drones the site lacks
     check_sources(s, site)
-    bag = bag or BagFacts.read(s.bag, s.views, s.remap)
+    if bag is None:
+        if (Path(s.bag) / 'metadata.yaml').is_file():  # another site's recording: said before its missing views
+            check_drones(site, recorded_drones(_graph_names(s)), f'bag {s.bag}')
+        bag = BagFacts.read(s.bag, s.views, s.remap)
     check_drones(site, s.views, 'views')
     check_drones(site, bag.drones, f'bag {s.bag}')
     monitor = s.monitor and bag.has_ground_truth  # without ground truth: no scores (monitor_skipped says so)

@@ -15,6 +15,9 @@ and overall (precision, recall, MOTA, IDF1; ``metrics.image_boxes``), and the sh
 track ids of /tracks in the same frame; ``--boxes-2d`` writes them as ``frame,id,x,y,w,h,score,drone``,
 ``--png-2d`` draws one frame of every drone, ``--overlays DIR`` writes the recorded overlay images
 (``/Dn/overlay/compressed``, when fuse published them) of that frame as ``DIR/overlay_Dn.png``.
+
+A bag without ``/ground_truth/pedestrians`` (a user's own recording) is not scored: the command says the
+evaluation was skipped, writes nothing and exits 0.
 """
 
 import json
@@ -71,10 +74,16 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     from matrix_core.bags.clock import read_sequence_clock
-    from matrix_core.evaluation.recording import ground_truth_from_bag, read_recording, score_recording
+    from matrix_core.evaluation.recording import ground_truth_from_bag, has_ground_truth, read_recording
+    from matrix_core.evaluation.recording import score_recording
     from matrix_core.metrics.report import format_metrics
 
     _check_paths(args)
+    if not has_ground_truth(args.ground_truth):  # a user's own recording: nothing to score against
+        print(
+            f'evaluation skipped: {args.ground_truth} has no ground truth ({topics.PEDESTRIANS_TOPIC}); nothing written'
+        )
+        return 0
     clock = read_sequence_clock(args.ground_truth).overridden(args.start_time, args.frame_period)
     recording = (
         read_recording(

@@ -106,6 +106,14 @@ def read_recording(path, **kwargs) -> Recording:
     raise FileNotFoundError(f'{path}: neither a rosbag2 folder nor a MOT text file')
 
 
+def has_ground_truth(path) -> bool:
+    """Whether the bag at ``path`` records the people's ground truth (``/ground_truth/pedestrians``): a sequence
+    bag does, a user's own recording (images and camera_info only) does not."""
+    from matrix_core.bags.salvage import topic_counts
+
+    return bag_topics.PEDESTRIANS_TOPIC in topic_counts(path)[0]
+
+
 def ground_truth_from_bag(path, clock: SequenceClock = None) -> BevPoints:
     """``frame id x y`` of every person in a sequence bag's ``/ground_truth/pedestrians`` (+ ids); frames by
     ``clock`` (default: the one the bag stores)."""
