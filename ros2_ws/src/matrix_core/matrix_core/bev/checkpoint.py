@@ -35,8 +35,8 @@ def load_model(path, settings_overrides: dict = None) -> tuple:
 
 def export_checkpoint(src, dst, trained_with: str = '') -> Path:
     """Write the shippable part of a training checkpoint (``model``, ``settings``, ``epoch``, ``history``,
-    ``trained_with``, and ``averaged`` when it has one: no optimizer state, a third of the size) from ``src``
-    (e.g. ``last.pt``) to ``dst``."""
+    ``trained_with``, and ``averaged`` and ``site`` when it has them: no optimizer state, a third of the size)
+    from ``src`` (e.g. ``last.pt``) to ``dst``."""
     ckpt = load_checkpoint(src)
     dst = Path(dst)
     dst.parent.mkdir(parents=True, exist_ok=True)
@@ -50,6 +50,8 @@ def export_checkpoint(src, dst, trained_with: str = '') -> Path:
     }
     if 'averaged' in ckpt:  # weights averaged over these epochs (bev/averaging.py)
         shipped['averaged'] = ckpt['averaged']
+    if 'site' in ckpt:  # the site it was trained for (train --site, bev/site_training.py)
+        shipped['site'] = ckpt['site']
     torch.save(shipped, tmp)
     tmp.replace(dst)
     return dst

@@ -61,6 +61,9 @@ class TrainConfig:
     augment: AugmentConfig = field(default_factory=AugmentConfig)  # training images only; off by default
     min_views: int = 4
     seed: int = 0
+    # A checkpoint (path) whose weights training starts from (fine-tuning); its model and temporal setting must
+    # be the config's ``bev`` ones. Empty: from scratch. A resumed run continues from last.pt instead.
+    init: str = ''
     num_threads: int = 1
     validate_every: int = 1  # epochs
     out_dir: str = 'out/train'

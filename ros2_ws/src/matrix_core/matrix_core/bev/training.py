@@ -55,6 +55,22 @@ def open_sequences(specs: list, config: TrainConfig, training: bool = False) -> 
     return out
 
 
+def load_initial_weights(model, config: TrainConfig, log=print) -> None:
+    """Load ``config.init``'s weights into ``model`` (fine-tuning); ValueError naming the checkpoint when its
+    network is not the config's (another model or temporal setting: its weights would not fit)."""
+    ckpt = load_checkpoint(config.init)
+    trained = ckpt.get('settings') or {}
+    theirs = (trained.get('model'), trained.get('temporal', True))
+    ours = (config.bev.model, config.bev.temporal)
+    if theirs != ours:
+        raise ValueError(
+            f'init checkpoint {config.init}: network {theirs[0]} (temporal {theirs[1]}), but the config trains '
+            f'{ours[0]} (temporal {ours[1]})'
+        )
+    model.load_state_dict(ckpt['model'])
+    log(f'fine-tuning from {config.init} ({theirs[0]}, cells of {trained.get("cell_m")} m)')
+
+
 def drop_views(mask: torch.Tensor, p: float, min_views: int, rng: np.random.Generator) -> torch.Tensor:
     """Randomly switch off views of a (V,) bool mask with probability ``p`` each, keeping >= min_views."""
     present = np.flatnonzero(mask.numpy())
@@ -147,11 +163,14 @@ def train(
     progress: bool = True,
     log=print,
     device: str = DEFAULT_DEVICE,
+    tags: dict = None,
 ) -> list:
     """Train; returns the history (one dict per epoch). Writes ``last.pt`` every epoch, ``best.pt`` at the
     best ``val_score`` (validation MODA weighted per sequence, :func:`validation_record`), ``history.json``;
     ``resume`` continues from ``last.pt`` (same config). ``device``: where the network trains and validates
-    (``matrix_core.device``; resolved first, ``auto``'s choice told to ``log``); samples are made on the CPU."""
+    (``matrix_core.device``; resolved first, ``auto``'s choice told to ``log``); samples are made on the CPU.
+    ``config.init``: the weights of a fresh run's first step. ``tags``: entries every checkpoint written
+    carries (``train --site``: the site it is for)."""
     from tqdm import tqdm
 
     device = resolve_device(device, log)
@@ -164,10 +183,14 @@ def train(
     if len(shapes) != 1:
         raise ValueError(f'training sequences have different BEV grids {shapes}: set bev.area in the config')
     val_sequences = open_sequences(config.val, config) if config.val else []
-    model = build_model(config.bev.model, temporal=config.bev.temporal).to(device)
+    model = build_model(config.bev.model, temporal=config.bev.temporal)
+    last = out_dir / 'last.pt'
+    if config.init and not (resume and last.is_file()):
+        load_initial_weights(model, config, log)
+    model = model.to(device)
+    tags = dict(tags or {})
     optimizer = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay)
     start_epoch, history, best = 0, [], -np.inf
-    last = out_dir / 'last.pt'
     if resume and last.is_file():
         ckpt = load_checkpoint(last)
         model.load_state_dict(ckpt['model'])
@@ -207,7 +230,7 @@ def train(
             record.update(validation_record(config.val, results))
             if record['val_score'] > best:
                 best = record['val_score']
-                save_checkpoint(out_dir / 'best.pt', model, config.bev, epoch=epoch + 1, metrics=record)
+                save_checkpoint(out_dir / 'best.pt', model, config.bev, epoch=epoch + 1, metrics=record, **tags)
         history.append(record)
         log(' '.join(f'{k}={v:.4f}' if isinstance(v, float) else f'{k}={v}' for k, v in record.items()))
         save_checkpoint(
@@ -220,14 +243,15 @@ def train(
             best=best,
             torch_rng=torch.get_rng_state(),
             config=json.loads(json.dumps(dataclasses.asdict(config), default=str)),
+            **tags,
         )
         if config.average_epochs:
-            save_checkpoint(out_dir / f'epoch{epoch + 1}.pt', model, config.bev, epoch=epoch + 1)
+            save_checkpoint(out_dir / f'epoch{epoch + 1}.pt', model, config.bev, epoch=epoch + 1, **tags)
         atomic_write_text(out_dir / 'history.json', json.dumps(history, indent=2))
     if config.average_epochs and not any('averaged' in h for h in history):
-        record = average_last_epochs(config, out_dir, sequences, val_sequences, best, progress, device)
-        history.append(record)
-        log(' '.join(f'{k}={v:.4f}' if isinstance(v, float) else f'{k}={v}' for k, v in record.items()))
+        entry = average_last_epochs(config, out_dir, sequences, val_sequences, best, progress, device, tags)
+        history.append(entry)
+        log(' '.join(f'{k}={v:.4f}' if isinstance(v, float) else f'{k}={v}' for k, v in entry.items()))
         atomic_write_text(out_dir / 'history.json', json.dumps(history, indent=2))
     return history
 
@@ -240,6 +264,7 @@ def average_last_epochs(
     best: float,
     progress: bool = True,
     device='cpu',
+    tags: dict = None,
 ) -> dict:
     """The mean of the weights of the last ``config.average_epochs`` epochs (``out_dir/epochN.pt``), its
     batch-norm statistics measured over ``config.bn_samples`` training steps (augmented, views dropped, as
@@ -267,7 +292,8 @@ def average_last_epochs(
                 config.val, [evaluate(model, s, config.tracker, progress=progress) for s in val_sequences]
             )
         )
-    save_checkpoint(out_dir / 'averaged.pt', model, config.bev, epoch=config.epochs, averaged=epochs, metrics=record)
+    extra = {'epoch': config.epochs, 'averaged': epochs, 'metrics': record, **(tags or {})}
+    save_checkpoint(out_dir / 'averaged.pt', model, config.bev, **extra)
     if record.get('val_score', -np.inf) > best:
-        save_checkpoint(out_dir / 'best.pt', model, config.bev, epoch=config.epochs, averaged=epochs, metrics=record)
+        save_checkpoint(out_dir / 'best.pt', model, config.bev, **extra)
     return record

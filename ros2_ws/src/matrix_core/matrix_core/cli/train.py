@@ -1,4 +1,6 @@
-"""``matrix-tracker train --config CONFIG``: train the BEV fusion network on MATRIX-format folders.
+"""``matrix-tracker train --config CONFIG``: train the BEV fusion network on MATRIX-format folders or site datasets;
+``matrix-tracker train --site SITE``: a detector for one site, on sequences of it that it simulates itself
+(``cli/train_site.py``, docs/your-own-site.md).
 
 CONFIG is a YAML file or the name of a shipped config (``matrix_core/bev/configs``: sample, complex).
 Writes ``last.pt`` (every epoch, for --resume), ``best.pt`` (best validation score, ``val_score``: MODA
@@ -8,6 +10,7 @@ this machine lacks is an error before anything is read.
 """
 
 from matrix_core.cli.argument_types import non_negative_int, positive_int
+from matrix_core.cli.train_site import add_site_arguments, run_site
 from matrix_core.device import DeviceSettings
 from matrix_core.output_paths import add_overwrite_argument, check_output
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
@@ -17,7 +20,7 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         'train', help='train the BEV fusion network (progress bars, checkpoints, resume)', description=__doc__
     )
-    p.add_argument('--config', required=True, help='YAML config file or shipped config name')
+    p.add_argument('--config', help='YAML config file or shipped config name (required without --site)')
     p.add_argument('--out', help='output folder (default: out_dir of the config)')
     p.add_argument('--resume', action='store_true', help='continue from OUT/last.pt if it exists')
     add_overwrite_argument(p)
@@ -39,6 +42,7 @@ def add_parser(subparsers) -> None:
         'val_score: the model-selection protocol of the shipped default, docs/detector.md)',
     )
     add_settings_arguments(p, DeviceSettings)
+    add_site_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -54,6 +58,10 @@ def run(args) -> int:
         for k, v in (('epochs', args.epochs), ('max_steps_per_epoch', args.max_steps_per_epoch), ('seed', args.seed))
         if v is not None
     }
+    if args.site:
+        return run_site(args, device, overrides)
+    if not args.config:
+        raise ValueError('--config is required (or --site SITE: a detector for that site)')
     config = load_config(args.config, overrides)
     out = Path(args.out or config.out_dir)
     # before any work: never into a training or validation sequence or over the config; an earlier run's
