@@ -6,6 +6,11 @@ the first frame's prior from ``DATASET/reference/calibrations`` when present, el
 world frame (with links to the images in ``DIR/image_subsets``, so that ``open_dataset(DIR)`` reads it like
 any MATRIX folder) and ``DIR/calibration_status.csv``.
 
+A site dataset (``matrix-tracker simulate --site``) is calibrated with its site's boards and each drone's own
+camera and image size (``--config`` given: that scene instead), the prior from its references; ``DIR`` is then
+a site dataset of its own (``datasets.site_writer.SiteCalibrationWriter``: ``DIR/calibrations/<drone>/``,
+links in ``DIR/images/<drone>/``, its ``site.yaml`` naming the source's references).
+
 ``--registration REG``: the ``--out`` folder of ``matrix-tracker register`` (``REG/registration/Drone{N}_{TTTT}.json``).
 Each frame is then calibrated as the live ``calib`` node with ``use_registration`` does: the camera its
 registration implies predicts the boards; a frame without a record, or whose registration failed or is not
@@ -42,7 +47,8 @@ from matrix_core.calib.scene import load_scene
 from matrix_core.calib.prior import initial_prior
 from matrix_core.calib.settings import CalibSettings
 from matrix_core.cli.main import main as cli_main
-from matrix_core.datasets import DatasetError, MatrixDataset, MatrixWriter, open_dataset
+from matrix_core.datasets import DatasetError, MatrixDataset, MatrixWriter, SiteDataset, open_dataset
+from matrix_core.datasets.site_writer import SiteCalibrationWriter
 from matrix_core.register.file_frame import read_registration
 from matrix_core.output_paths import atomic_write_text, check_output
 from matrix_core.settings import add_settings_arguments, settings_from_namespace
@@ -68,13 +74,14 @@ COLUMNS = (
     'message',
 )
 NAN = float('nan')
+RECORD_PATTERN = '*_[0-9][0-9][0-9][0-9].json'  # register's records: Drone3_0017.json, kestrel_0017.json
 
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         'calibrate', help='estimate every frame\'s camera pose from the ground checkerboards', description=__doc__
     )
-    add_selection_arguments(p, 'calibrate', 'MATRIX-format folder', 'output folder')
+    add_selection_arguments(p, 'calibrate', 'MATRIX-format folder or site dataset', 'output folder')
     p.add_argument('--frame-period', type=positive_float, default=0.5, help='seconds between frames (for ages)')
     p.add_argument('--compare', action='store_true', help='print errors against the stored calibrations')
     p.add_argument(
@@ -99,10 +106,10 @@ def registration_folder(path) -> Path:
     the records; :class:`DatasetError` when neither has any."""
     path = Path(path)
     for folder in (path / 'registration', path):
-        if folder.is_dir() and any(folder.glob('Drone*_*.json')):
+        if folder.is_dir() and any(folder.glob(RECORD_PATTERN)):
             return folder
     raise DatasetError(
-        f'{path}: no registration records (Drone*_*.json) in it or in its registration/ '
+        f'{path}: no registration records ({RECORD_PATTERN}) in it or in its registration/ '
         f'(the --out folder of `matrix-tracker register`)'
     )
 
@@ -170,15 +177,33 @@ def _calibrate_frame(dataset, out, writer, calibrator, view, frame, stamp, regis
     if result.status is CalibStatus.OK or write_stale:
         try:
             writer.write_camera(view, frame, result.camera)
-            _link_image(dataset, out, view, frame)
+            _link_image(writer, dataset, out, view, frame)
             row['written'] = True
         except Exception as exc:
             row['failure'], row['message'] = 'write', f'{row["message"]}; {_failure("write", exc)}'
     return row
 
 
+def _scenes(dataset, settings: CalibSettings, views) -> dict:
+    """view -> its calibration scene: ``--config``'s for every view; a site dataset's, without ``--config``:
+    the site's boards with that drone's camera (``site.calib_scene``)."""
+    if settings.config or not isinstance(dataset, SiteDataset):
+        scene = load_scene(settings.config)
+        return dict.fromkeys(views, scene)
+    from matrix_core.site.calib_scene import site_calib_scene
+
+    return {v: site_calib_scene(dataset.site, dataset.site.drone(v)) for v in views}
+
+
+def _writer(dataset, out: Path):
+    extra = {'calibrated_from': str(dataset.root)}
+    if isinstance(dataset, SiteDataset):
+        return SiteCalibrationWriter(out, dataset, extra)
+    return MatrixWriter(out, area=dataset.area, extra_meta=extra)
+
+
 def calibrate_dataset(
-    dataset: MatrixDataset,
+    dataset,
     out: Path,
     settings: CalibSettings,
     views=(),
@@ -191,14 +216,15 @@ def calibrate_dataset(
     """Run the calibration over ``dataset``; returns the status rows (also written to the CSV).
     ``registration_dir``: the ``--out`` folder of ``matrix-tracker register`` (see :func:`registration_folder`)
     whose records guide the frames; ``write_stale``: write stale frames' last good poses too."""
-    scene = load_scene(settings.config)
     views, frames = dataset.select_views(views), dataset.select_frames(max_frames)
+    scenes = _scenes(dataset, settings, views)
     registrations = None if registration_dir is None else registration_folder(registration_dir)
-    writer = MatrixWriter(out, area=dataset.area, extra_meta={'calibrated_from': str(dataset.root)})
+    writer = _writer(dataset, out)
     rows = []
     with tqdm(total=len(views) * len(frames), desc='calibrate', unit='image') as bar:
         for view in views:
             try:
+                scene = scenes[view]
                 calibrator = DroneCalibrator(scene, settings, *initial_prior(scene, view, dataset))
             except Exception as exc:  # one drone without a usable prior: its frames fail, the others run
                 reason = _failure('prior', exc)
@@ -231,9 +257,12 @@ def calibrate_dataset(
     return rows
 
 
-def _link_image(dataset, out: Path, view: str, frame: int) -> None:
-    src = dataset.image_path(view, frame).resolve()
-    dst = out / 'image_subsets' / view / src.name
+def _link_image(writer, dataset, out: Path, view: str, frame: int) -> None:
+    if isinstance(writer, SiteCalibrationWriter):
+        src, dst = writer.image_link(view, frame)
+    else:
+        src = dataset.image_path(view, frame).resolve()
+        dst = out / 'image_subsets' / view / src.name
     dst.parent.mkdir(parents=True, exist_ok=True)
     if not dst.exists():
         os.symlink(src, dst)
@@ -253,12 +282,14 @@ def run(args) -> int:
     settings = settings_from_namespace(CalibSettings, args)
     out = check_output(args.out, [args.dataset, args.registration, settings.config], args.overwrite)
     dataset = open_dataset(args.dataset)
-    if not isinstance(dataset, MatrixDataset):
-        raise DatasetError(f'{args.dataset} is a {dataset.format_name} folder; calibrate needs MATRIX format')
-    dataset.select_views(args.views)  # checked before the first frame, as the records and the scene below
+    if not isinstance(dataset, (MatrixDataset, SiteDataset)):
+        raise DatasetError(
+            f'{args.dataset} is a {dataset.format_name} folder; calibrate needs MATRIX format or a site dataset'
+        )
+    views = dataset.select_views(args.views)  # checked before the first frame, as the records and the scenes
     if args.registration is not None:
         registration_folder(args.registration)
-    load_scene(settings.config)
+    _scenes(dataset, settings, views)
     rows = calibrate_dataset(
         dataset,
         out,

@@ -1,11 +1,12 @@
 """``matrix-tracker register DATASET --out DIR``: register every frame of every drone to its reference.
 
-Writes ``DIR/registration/Drone{N}_{TTTT}.json`` with ``H_cur_to_ref`` (3x3, current raw image pixels ->
-reference raw image pixels), ``H_img_to_ground`` (3x3, current raw image pixels -> the dataset's own world
-ground plane in metres, the frame of its calibration files), ``confidence``, ``matches``, ``inliers``,
-``inlier_error_px``, ``status``, ``reference_id``, ``backend``, ``seconds``, ``message``. Both matrices are
-null when status is 'failed'. ``summary.json`` adds the error of each pair against the ground truth from
-the stored calibrations (mean over visible ground points, full-resolution pixels).
+Writes ``DIR/registration/Drone{N}_{TTTT}.json`` (a site dataset's drones: ``<drone>_{TTTT}.json``) with
+``H_cur_to_ref`` (3x3, current raw image pixels -> reference raw image pixels), ``H_img_to_ground`` (3x3,
+current raw image pixels -> the dataset's own world ground plane in metres, the frame of its calibration
+files), ``confidence``, ``matches``, ``inliers``, ``inlier_error_px``, ``status``, ``reference_id``,
+``backend``, ``seconds``, ``message``. Both matrices are null when status is 'failed'. ``summary.json`` adds
+the error of each pair against the ground truth from the stored calibrations (mean over visible ground points,
+full-resolution pixels).
 
 No frame ends the run: a frame whose registration, check against the calibration or overlay raises (and
 every frame of a drone whose reference cannot be used) is reported with the step and reason in its
@@ -14,6 +15,9 @@ raised) and ``unmeasured`` (registered, but the error against the calibration co
 
 The output folder must not be, contain or lie inside the dataset; its ``registration/`` must be new or
 empty (``--overwrite``: write into it).
+
+A site dataset (``matrix-tracker simulate --site``) is read the same way: any drone names, each drone's own
+camera and image size, its references those its ``site.yaml`` names, the area the site's.
 
 The reference of each drone is the folder's ``reference/`` image and calibration; without one, the
 first frame (with its stored calibration) is the reference. Obstacles and the flat-ground extent come from
@@ -33,7 +37,7 @@ from tqdm import tqdm
 
 from matrix_core.cli.argument_types import non_negative_int
 from matrix_core.cli.selection import add_selection_arguments
-from matrix_core.datasets import DatasetError, MatrixDataset, open_dataset
+from matrix_core.datasets import DatasetError, MatrixDataset, SiteDataset, open_dataset
 from matrix_core.output_paths import atomic_write_text, check_output
 from matrix_core.register.backends import make_backend
 from matrix_core.register.evaluate import homography_error_px
@@ -51,7 +55,10 @@ def add_parser(subparsers) -> None:
         'register', help="register each drone's frames to its reference image", description=__doc__
     )
     add_selection_arguments(
-        p, 'register', 'MATRIX folder (real or simulated)', 'output folder (gets a registration/ subfolder)'
+        p,
+        'register',
+        'MATRIX folder (real or simulated) or site dataset',
+        'output folder (gets a registration/ subfolder)',
     )
     p.add_argument(
         '--png',
@@ -140,8 +147,10 @@ def run(args) -> int:
     check_output(args.out, [args.dataset], overwrite=True)
     out = check_output(Path(args.out) / 'registration', overwrite=args.overwrite)
     dataset = open_dataset(args.dataset)
-    if not isinstance(dataset, MatrixDataset):
-        raise DatasetError(f'{args.dataset}: register needs a MATRIX folder (drones with per-frame calibration)')
+    if not isinstance(dataset, (MatrixDataset, SiteDataset)):
+        raise DatasetError(
+            f'{args.dataset}: register needs a MATRIX folder or a site dataset (drones with per-frame calibration)'
+        )
     settings, note = settings_for_dataset(settings_from_namespace(RegisterSettings, args), dataset)
     if note:
         print(note)

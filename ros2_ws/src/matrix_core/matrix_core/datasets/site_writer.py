@@ -136,3 +136,35 @@ class SiteDatasetWriter:
             [(int(i), *p) for i, p in zip(marker_ids, uv)],
             '%d %.4f %.4f',
         )
+
+
+class SiteCalibrationWriter:
+    """Writes per-frame calibrations of a site dataset's frames (``matrix-tracker calibrate``) under ``root`` as
+    a site dataset of their own: ``site.yaml`` (the source's site, its references those of the source, by
+    absolute ``references.root``), ``site_dataset.json``, ``calibrations/<drone>/{intr,extr}_TTTT.xml`` and
+    links to the source images in ``images/<drone>/``, so that ``open_dataset(root)`` reads it as any site
+    dataset."""
+
+    def __init__(self, root, source, extra_meta: dict = None):
+        from matrix_core.site.references import reference_root
+
+        self.root, self.source = Path(root), source
+        self.root.mkdir(parents=True, exist_ok=True)
+        doc = yaml.safe_load((source.root / layout.SITE_FILE).read_text())
+        doc['references'] = {'source': 'files', 'root': str(reference_root(source.site))}
+        where = source.root.resolve()
+        header = f'# Written by matrix-tracker calibrate from {where}; its references are that folder\'s.\n'
+        atomic_write_text(self.root / layout.SITE_FILE, header + yaml.safe_dump(doc, sort_keys=False, width=110))
+        meta = {'format': layout.FORMAT_NAME, 'version': layout.FORMAT_VERSION, 'generator': 'matrix-tracker'}
+        meta.update({'image_ext': source.meta.get('image_ext', '.png'), **(extra_meta or {})})
+        atomic_write_text(self.root / layout.META_FILE, json.dumps(meta, indent=2, sort_keys=True) + '\n')
+
+    def write_camera(self, view: str, frame: int, camera: Camera) -> None:
+        """Write ``calibrations/<view>/{intr,extr}_TTTT.xml`` of ``camera``."""
+        folder = self.root / layout.CALIBRATIONS / view
+        _write_matrix_xml(folder / layout.intrinsic_name(frame), folder / layout.extrinsic_name(frame), camera)
+
+    def image_link(self, view: str, frame: int) -> tuple:
+        """(the source image of ``view`` at ``frame``, the path its link takes under ``root``)."""
+        src = self.source.image_path(view, frame).resolve()
+        return src, self.root / layout.IMAGES / view / src.name

@@ -1,6 +1,7 @@
 """The file form of a :class:`~matrix_core.register.registration.Registration`: the JSON record that
 ``matrix-tracker register`` writes per drone and frame, with its homographies in the MATRIX folder's own
-file frame (raw image pixels, the calibration files' world), so that any MATRIX tool reads them.
+file frame (raw image pixels, the calibration files' world), so that any MATRIX tool reads them. A site
+dataset's calibration files are in the same file conventions, so its records are too.
 
 Record keys: the scalar fields of the registration (``Registration.to_dict``) plus
 ``H_cur_to_ref`` (3x3: raw current-image pixels -> raw reference-image pixels) and ``H_img_to_ground``
@@ -23,9 +24,12 @@ BROKEN_RECORD = ('unusable record', 'unreadable record')  # how a record file th
 
 
 def record_name(view: str, frame: int) -> str:
-    """File name of the record of drone ``view`` ('D3') and ``frame`` in ``DIR/registration/``:
-    'Drone3_0017.json'."""
-    return f'Drone{conv.drone_number(view)}_{frame:04d}.json'
+    """File name of the record of drone ``view`` and ``frame`` in ``DIR/registration/``: 'Drone3_0017.json' for
+    a MATRIX view name ('D3'), '<view>_0017.json' for any other drone name (a site dataset's: 'kestrel_0017.json')."""
+    try:
+        return f'Drone{conv.drone_number(view)}_{frame:04d}.json'
+    except ValueError:
+        return f'{view}_{frame:04d}.json'
 
 
 def _affine_of(fn) -> np.ndarray:
