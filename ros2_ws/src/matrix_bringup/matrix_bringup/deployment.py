@@ -121,7 +121,7 @@ def deployment(s: GraphSettings, bag: BagFacts = None, link_mbit=0.0) -> Deploym
     for all or a dict by drone (drones not in it: 0)."""
     if s.drones_per_process != 1:
         raise ValueError('a deployment runs one drone per host: drones_per_process must be 1')
-    bag = bag or BagFacts.read(s.bag, s.views)
+    bag = bag or BagFacts.read(s.bag, s.views, s.remap)
     if not bag.compressed:
         raise ValueError(
             'a deployment sends compressed images over the links, never raw 1080p: '
