@@ -107,6 +107,8 @@ def test_a_second_run_reuses_the_finished_sequences_and_resumes(trained, capsys)
     assert (data / 'simulate_summary.json').stat().st_mtime_ns == stamp  # not simulated again
     history = json.loads((out / 'history.json').read_text())
     assert [h['epoch'] for h in history] == [1, 2]
+    best = max(history, key=lambda h: h['val_score'])  # printed in percent, as evaluate prints MODA
+    assert f'selected: epoch {best["epoch"]}, validation MODA {100 * best["val_score"]:.2f} %' in printed
 
 
 def test_seeds_shared_by_training_and_validation_are_refused_before_anything_is_written(court, tmp_path):

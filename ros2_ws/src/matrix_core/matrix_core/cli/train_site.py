@@ -116,7 +116,7 @@ def run_site(args, device: str, overrides: dict) -> int:
     chosen = max((h for h in history if 'val_score' in h), key=lambda h: h['val_score'], default=None)
     if chosen:
         print(f'selected: epoch {chosen["epoch"]}{" (weight average)" if "averaged" in chosen else ""}, '
-              f'validation MODA {chosen["val_score"]:.2f} %')  # fmt: skip
+              f'validation MODA {100 * chosen["val_score"]:.2f} %')  # fmt: skip
     print(f'done: {len(epochs)} epochs; checkpoint for site {site.name}: {path}')
     print(f'  live:    checkpoint:={path.resolve()} (the fuse node; ros2 launch matrix_bringup full_graph.launch.py)')
     print(f'  offline: matrix-tracker evaluate DATASET --checkpoint {path}')
