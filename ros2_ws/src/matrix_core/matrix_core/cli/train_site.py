@@ -20,7 +20,8 @@ def add_site_arguments(p) -> None:
     g.add_argument(
         '--site',
         help='site file or shipped site name: simulate its sequences and train on its BEV grid (area, cell); '
-        f'--config then defaults to the shipped recipe {DEFAULT_RECIPE!r}',
+        f'--config then defaults to the shipped recipe {DEFAULT_RECIPE!r}, --out to out/train/<site name>, and '
+        '--export (default OUT/detector_<site name>.pt) writes best.pt (last.pt without validation seeds)',
     )
     g.add_argument(
         '--init',
