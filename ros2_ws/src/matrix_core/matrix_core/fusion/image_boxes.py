@@ -28,6 +28,7 @@ import numpy as np
 from matrix_core.geometry.camera import Camera, pose_matrix
 from matrix_core.geometry.homography import implied_camera
 from matrix_core.geometry.occlusion import as_boxes, segments_blocked
+from matrix_core.reference_size import REFERENCE_WIDTH
 from matrix_core.register.scene import scene_from_meta
 from matrix_core.register.settings import MATRIX_BLOCK
 from matrix_core.settings import Settings
@@ -226,7 +227,7 @@ def draw_image_boxes(image: np.ndarray, boxes, ids, occluded=None, thickness: in
     """A copy of the (H, W, 3) BGR ``image`` with (N, 4) ``boxes`` and their ids drawn, a colour per id;
     occluded boxes (N,) bool are drawn thin."""
     img = image.copy()
-    scale = max(img.shape[1] / 1920, 0.3)
+    scale = max(img.shape[1] / REFERENCE_WIDTH, 0.3)
     boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
     for k, (i, b) in enumerate(zip(ids, boxes)):
         colour = id_colour(i)
