@@ -9,9 +9,11 @@ from matrix_core.evaluation.graph_report import (
     overview_image,
     score_view_frame,
     summary_table,
+    write_graph_report,
 )
 from matrix_core.geometry.camera import Camera
-from matrix_core.register.registration import RegistrationStatus
+from matrix_core.register.evaluate import gt_cur_to_ref
+from matrix_core.register.registration import Registration, RegistrationStatus
 
 
 @pytest.fixture(scope='module')
@@ -70,3 +72,34 @@ def test_summary_table_and_picture(ds):
     est = overview_image(images, cams, ds.area, cams, thumb_width=320).astype(int)
     green = (est[:, :, 1] > 180) & (est[:, :, 0] < 60) & (est[:, :, 2] < 60)
     assert green.sum() > 300  # published calibration drawn in green over the white truth
+
+
+def test_registration_error_in_reference_pixels(ds, tmp_path):
+    truth, ref = ds.camera('D2', 1), ds.reference_camera('D2')
+    exact = gt_cur_to_ref(truth, ref)
+    ground = ref.ground_H_img() @ exact
+    perfect = score_view_frame(
+        'D2', 1.5, truth, ds.area, truth, RegistrationStatus.OK, 0.9, ground, ref_H_img=exact, reference=ref
+    )
+    assert perfect.reg_ref_err_px == pytest.approx(0, abs=1e-6)
+    # the homography followed by a 3-4-5 px shift in the reference image is 5 px off everywhere
+    shifted = np.array([[1.0, 0.0, 3.0], [0.0, 1.0, 4.0], [0.0, 0.0, 1.0]]) @ exact
+    off = score_view_frame(
+        'D2', 1.5, truth, ds.area, truth, RegistrationStatus.OK, 0.9, ground, ref_H_img=shifted, reference=ref
+    )
+    assert off.reg_ref_err_px == pytest.approx(5.0, abs=1e-6)
+    # without the reference camera, or for a failed registration, there is no pixel figure
+    assert score_view_frame('D2', 1.5, truth, ds.area, truth, RegistrationStatus.OK, 0.9, ground).reg_ref_err_px is None
+    failed = score_view_frame(
+        'D2', 1.5, truth, ds.area, truth, RegistrationStatus.FAILED, 0.1, None, ref_H_img=shifted, reference=ref
+    )
+    assert failed.reg_ref_err_px is None
+    # the report's table and CSV carry it, for the views whose reference it was given
+    registration = Registration(RegistrationStatus.OK, ref_H_img=shifted, ground_H_img=ground, confidence=0.9)
+    scored = write_graph_report(
+        tmp_path, ['D2'], ds.area, {('D2', 1.5): truth}, {}, {('D2', 1.5): registration}, {}, {'D2': ref}
+    )
+    assert scored == 1
+    table = (tmp_path / 'graph_summary.txt').read_text().splitlines()
+    assert table[0].split()[-1] == 'ref_px' and table[2].split()[-1] == '5.000'
+    assert 'reg_ref_err_px' in (tmp_path / 'graph_scores.csv').read_text().splitlines()[0]

@@ -476,6 +476,9 @@ def graph_nodes(s: GraphSettings, bag: BagFacts = None) -> list:
                     'wait_for': ['register', 'calib', 'tracks'],
                     'idle_timeout': s.lockstep_timeout,
                     'out_dir': s.monitor_out,
+                    'reference_dataset': s.dataset,
+                    **references,
+                    **on_site,
                 },
             )
         )

@@ -14,7 +14,8 @@ waits for, so no stage of the graph falls behind the replay.
 When ``expected_frames`` frames are done, or nothing arrived for ``idle_timeout`` seconds, it prints the
 summary table (also ``out_dir/graph_summary.txt``), writes ``out_dir/graph_overview.png`` and
 ``out_dir/graph_scores.csv``, and exits.
-Exit code 1 if no frame could be scored at all.
+With the references register uses (``reference_dataset`` or ``site_references``) the registration is also
+scored in reference pixels. Exit code 1 if no frame could be scored at all.
 """
 
 import time
@@ -27,6 +28,8 @@ from std_msgs.msg import Header
 
 from matrix_bringup.monitor_settings import GraphMonitorSettings
 from matrix_core import topics
+from matrix_core.datasets.base import DatasetError
+from matrix_core.datasets.drone_inputs import open_references
 from matrix_core.evaluation.graph_report import write_graph_report
 from matrix_core.message_fields import (
     ConversionError,
@@ -35,6 +38,7 @@ from matrix_core.message_fields import (
     registration_from_msg,
     stamp_seconds,
 )
+from matrix_core.site.parameter import named_site
 from matrix_ros.executor import make_executor, spin_until
 from matrix_ros.params import SettingsNode, declare_settings, parse_node_args
 from matrix_ros.qos import publisher_qos, qos_by_name
@@ -47,6 +51,7 @@ class GraphMonitor(SettingsNode):
         self.truth, self.estimated, self.homography, self.images = {}, {}, {}, {}
         self.last_arrival = time.monotonic()
         self.done = False
+        self.references = self._references()
         history = qos_by_name('history', depth=50)
         for view in s.views:
             self.create_subscription(
@@ -86,6 +91,23 @@ class GraphMonitor(SettingsNode):
         self.first_seen = {}  # stamp -> monotonic time of the frame's first message (any topic)
         self.warned = set()  # stamps warned about (waiting_warning)
         self.create_timer(0.5, self._check)
+
+    def _references(self) -> dict:
+        """view -> reference Camera register uses (its pixel error is scored against it); {} without a source.
+        A view whose reference calibration cannot be read is said and scored in ground metres only."""
+        s = self.settings
+        try:
+            dataset = open_references(s.reference_dataset, named_site(s.site) if s.site_references else None)
+        except DatasetError as exc:
+            self.get_logger().error(f'no registration pixel error: {exc}')
+            return {}
+        cameras = {}
+        for view in [] if dataset is None else s.views:
+            try:
+                cameras[view] = dataset.reference_camera(view)
+            except (DatasetError, OSError, ValueError) as exc:
+                self.get_logger().error(f'{view}: no registration pixel error: unreadable reference calibration: {exc}')
+        return cameras
 
     def _key(self, view, msg):
         self.last_arrival = time.monotonic()
@@ -161,7 +183,7 @@ class GraphMonitor(SettingsNode):
     def finish(self):
         s = self.settings
         self.scored = write_graph_report(
-            s.out_dir, s.views, s.area, self.truth, self.estimated, self.homography, self.images
+            s.out_dir, s.views, s.area, self.truth, self.estimated, self.homography, self.images, self.references
         )
         self.done = True
 

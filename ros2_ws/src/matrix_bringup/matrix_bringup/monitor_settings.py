@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 from matrix_core.settings import check_area
 
 from matrix_core import topics
+from matrix_core.site.parameter import site_field, site_references_field
 from matrix_core.datasets.matrix_conventions import MATRIX_AREA, MATRIX_VIEWS
 
 STAGES = ('register', 'calib', 'tracks')
@@ -40,9 +41,20 @@ class GraphMonitorSettings:
         metadata={'help': 'scene ground x_min y_min x_max y_max (internal world metres) for the scores and picture'},
     )
     out_dir: str = field(default='out/graph_monitor', metadata={'help': 'where the table, CSV and PNG go'})
+    reference_dataset: str = field(
+        default='',
+        metadata={
+            'help': "the dataset folder whose reference calibrations register uses: with it (or site_references) the "
+            "registration is also scored in reference pixels; empty: ground metres only"
+        },
+    )
+    site: str = site_field()
+    site_references: bool = site_references_field()
 
     def __post_init__(self):
         unknown = set(self.wait_for) - set(STAGES)
         if unknown or not self.wait_for:
             raise ValueError(f'wait_for must list some of {STAGES}, got {self.wait_for}')
         check_area(self.area)
+        if self.site_references and self.reference_dataset:
+            raise ValueError('give reference_dataset or site_references, not both')

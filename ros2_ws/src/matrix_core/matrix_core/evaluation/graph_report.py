@@ -15,6 +15,7 @@ import numpy as np
 from matrix_core.calib.evaluation import pose_errors
 from matrix_core.geometry.camera import Camera
 from matrix_core.geometry.homography import apply_homography
+from matrix_core.register.evaluate import homography_error_px
 from matrix_core.register.ground_mask import visible_ground_grid
 from matrix_core.register.registration import RegistrationStatus
 
@@ -31,6 +32,7 @@ class ViewFrameScore:
     reg_message: str = None
     reg_confidence: float = None
     reg_ground_err_m: float = None
+    reg_ref_err_px: float = None  # in the reference image; None without the reference camera
 
 
 def ground_homography_error_m(ground_H_img: np.ndarray, truth: Camera, area, step_m: float = 0.5) -> float:
@@ -53,13 +55,19 @@ def score_view_frame(
     reg_confidence: float = None,
     ground_H_img=None,
     reg_message: str = None,
+    ref_H_img=None,
+    reference: Camera = None,
 ) -> ViewFrameScore:
-    """Score what was published for ``view`` at ``stamp`` against the ``truth`` camera."""
+    """Score what was published for ``view`` at ``stamp`` against the ``truth`` camera; with the registration's
+    ``ref_H_img`` (3, 3) and the view's ``reference`` camera also the registration error in reference pixels
+    (:func:`~matrix_core.register.evaluate.homography_error_px`, the ``register`` CLI's figure)."""
     score = ViewFrameScore(view, stamp, reg_status=reg_status, reg_message=reg_message, reg_confidence=reg_confidence)
     if estimated is not None:
         score.rot_err_deg, score.centre_err_m = pose_errors(estimated, truth)
     if reg_status == RegistrationStatus.OK and ground_H_img is not None:
         score.reg_ground_err_m = ground_homography_error_m(ground_H_img, truth, area)
+        if ref_H_img is not None and reference is not None:
+            score.reg_ref_err_px = homography_error_px(ref_H_img, truth, reference, area)
     return score
 
 
@@ -72,7 +80,7 @@ def summary_table(scores: list, views: list) -> str:
     """Plain-text table: one row per view and an 'all' row."""
     header = (
         f'{"view":>5} {"frames":>6} {"calib":>5} {"rot_deg":>8} {"centre_m":>8} '
-        f'{"reg_ok":>6} {"conf":>6} {"ground_m":>8}'
+        f'{"reg_ok":>6} {"conf":>6} {"ground_m":>8} {"ref_px":>7}'
     )
     lines = [header, '-' * len(header)]
     for name, rows in [(v, [s for s in scores if s.view == v]) for v in views] + [('all', scores)]:
@@ -81,11 +89,12 @@ def summary_table(scores: list, views: list) -> str:
             f'{name:>5} {len(rows):>6} {sum(s.rot_err_deg is not None for s in rows):>5} '
             f'{_median([s.rot_err_deg for s in rows]):>8} {_median([s.centre_err_m for s in rows]):>8} '
             f'{registered:>6} {_median([s.reg_confidence for s in rows]):>6} '
-            f'{_median([s.reg_ground_err_m for s in rows]):>8}'
+            f'{_median([s.reg_ground_err_m for s in rows]):>8} {_median([s.reg_ref_err_px for s in rows]):>7}'
         )
     lines.append(
         'rot_deg, centre_m: median calibration error vs ground truth; ground_m: median mean ground '
-        'error of the registration homography (image -> ground), metres'
+        'error of the registration homography (image -> ground), metres; ref_px: median mean error of the '
+        'registration (image -> reference image), reference pixels'
     )
     return '\n'.join(lines)
 
@@ -142,9 +151,10 @@ def overview_image(
 
 
 def score_registration(
-    view: str, stamp: float, truth: Camera, area, estimated: Camera = None, registration=None
+    view: str, stamp: float, truth: Camera, area, estimated: Camera = None, registration=None, reference=None
 ) -> ViewFrameScore:
-    """:func:`score_view_frame` of a :class:`~matrix_core.register.registration.Registration` (or None)."""
+    """:func:`score_view_frame` of a :class:`~matrix_core.register.registration.Registration` (or None), with
+    the view's ``reference`` camera (or None)."""
     if registration is None:
         return score_view_frame(view, stamp, truth, area, estimated)
     return score_view_frame(
@@ -157,24 +167,29 @@ def score_registration(
         registration.confidence,
         registration.ground_H_img if registration.ok else None,
         registration.message,
+        registration.ref_H_img if registration.ok else None,
+        reference,
     )
 
 
 def write_graph_report(
-    out_dir, views: list, area, truth: dict, estimated: dict, registrations: dict, images: dict
+    out_dir, views: list, area, truth: dict, estimated: dict, registrations: dict, images: dict, references=None
 ) -> int:
     """Score every (view, stamp) of ``truth`` and write ``graph_summary.txt`` (also printed),
     ``graph_scores.csv`` and ``graph_overview.png`` (the last stamp with images) to ``out_dir``.
 
     Args:
         truth, estimated: (view, stamp) -> Camera; registrations: (view, stamp) -> Registration;
-        images: (view, stamp) -> (H, W, 3) BGR image.
+        images: (view, stamp) -> (H, W, 3) BGR image; references: view -> reference Camera (the
+        registration's pixel error is scored for the views it has).
 
     Returns:
         How many (view, stamp) pairs were scored.
     """
     scores = [
-        score_registration(key[0], key[1], cam, area, estimated.get(key), registrations.get(key))
+        score_registration(
+            key[0], key[1], cam, area, estimated.get(key), registrations.get(key), (references or {}).get(key[0])
+        )
         for key, cam in sorted(truth.items(), key=lambda kv: (kv[0][1], kv[0][0]))
     ]
     out = Path(out_dir)
