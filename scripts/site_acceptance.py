@@ -93,7 +93,7 @@ def main(argv=None) -> int:
     raw = yaml.safe_load(site_file.read_text())
     boards.write_text(yaml.safe_dump({k: raw[k] for k in BOARD_KEYS if k in raw}, sort_keys=False))
     commands = []
-    simulate = ['matrix-tracker', 'simulate', '--site', site_file, '--config', args.sim_config]
+    simulate = ['matrix-tracker', 'simulate', '--site', args.site, '--config', args.sim_config]
     simulate += ['--frames', args.frames, '--seed', args.seed, '--image_scale', args.image_scale]
     _run([*simulate, '--out', flight, '--bag'], commands, out / 'simulate.log')
     _run(
