@@ -53,7 +53,8 @@ def test_bad_file_is_one_line_and_exit_2(tmp_path):
 
 def test_no_such_site_names_the_shipped_ones(capsys):
     assert main(['site', 'check', 'nowhere']) == 2
-    assert 'site file not found: nowhere (a path, or a shipped site: matrix, plaza)' in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert 'site file not found: nowhere (a path, or a shipped site: matrix, plaza, ring12, ring3)' in err
 
 
 def test_the_docs_example_is_the_shipped_plaza():
