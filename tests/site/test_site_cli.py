@@ -59,5 +59,6 @@ def test_no_such_site_names_the_shipped_ones(capsys):
 
 def test_the_docs_example_is_the_shipped_plaza():
     page = (Path(__file__).resolve().parents[2] / 'docs' / 'site-file.md').read_text()
-    example = re.search(r'```yaml\n(.*?)```', page, flags=re.S).group(1)
+    section = page.split('## The format, with the plaza as the example', 1)[1]
+    example = re.search(r'```yaml\n(.*?)```', section, flags=re.S).group(1)
     assert yaml.safe_load(example) == yaml.safe_load((SITES_DIR / 'plaza.yaml').read_text())
