@@ -69,6 +69,13 @@ def test_fuse_started_with_ros2_run_feeds_another_process_and_takes_live_paramet
         '/tracks',
         'matrix_msgs/msg/TrackArray',
     )
+    # fuse builds markers only for a matched subscriber: let discovery pair fuse's /markers with the echo
+    # before the first frame, or a loaded machine fuses both frames before they match
+    ros_helpers.wait_for(
+        lambda: 'Publisher count: 1' in ros_helpers.ros2_graph('topic', 'info', '/markers').stdout,
+        120,
+        'fuse to offer /markers to the echo',
+    )
     topics = ','.join(BagFacts.read(str(sim / 'bag'), VIEWS).topics)
     player = ros_helpers.start_ros2(
         'run',
