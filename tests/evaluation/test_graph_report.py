@@ -9,6 +9,7 @@ from matrix_core.evaluation.graph_report import (
     overview_image,
     score_view_frame,
     summary_table,
+    true_references,
     write_graph_report,
 )
 from matrix_core.geometry.camera import Camera
@@ -103,3 +104,30 @@ def test_registration_error_in_reference_pixels(ds, tmp_path):
     table = (tmp_path / 'graph_summary.txt').read_text().splitlines()
     assert table[0].split()[-1] == 'ref_px' and table[2].split()[-1] == '5.000'
     assert 'reg_ref_err_px' in (tmp_path / 'graph_scores.csv').read_text().splitlines()[0]
+
+
+def test_a_reference_frame_in_the_recording_is_scored_by_its_true_camera(ds):
+    estimated_ref, true_ref = _shifted(ds.reference_camera('D2'), 0.2), ds.reference_camera('D2')
+    truth = {('D2', 4.5): true_ref, ('D2', 5.0): ds.camera('D2', 1), ('D3', 4.5): ds.camera('D3', 1)}
+    references = {'D2': estimated_ref, 'D3': ds.reference_camera('D3'), 'D4': ds.reference_camera('D4')}
+    # D2's reference frame (4.5 s, the stamp as a float sum) is in the recording; D4's is not; D3 names none
+    cameras, true_views = true_references(references, {'D2': 4.5 + 3e-9, 'D4': 9.0}, truth)
+    assert true_views == ['D2']
+    assert cameras['D2'] is true_ref
+    assert cameras['D3'] is references['D3'] and cameras['D4'] is references['D4']
+    # the registration exactly right for the true reference is 0 px off against it, not against the estimate
+    cur = ds.camera('D2', 1)
+    exact = gt_cur_to_ref(cur, true_ref)
+    ground = true_ref.ground_H_img() @ exact
+    args = ('D2', 5.0, cur, ds.area, cur, RegistrationStatus.OK, 0.9, ground)
+    against_truth = score_view_frame(*args, ref_H_img=exact, reference=cameras['D2'])
+    assert against_truth.reg_ref_err_px == pytest.approx(0, abs=1e-6)
+    assert score_view_frame(*args, ref_H_img=exact, reference=estimated_ref).reg_ref_err_px > 1.0
+
+
+def test_summary_table_fits_long_drone_names(ds):
+    truth = ds.camera('D1', 1)
+    scores = [score_view_frame('north_east', 0.5, truth, ds.area, truth)]
+    lines = summary_table(scores, ['north_east']).splitlines()
+    assert lines[0].split()[0] == 'view' and lines[2].split()[0] == 'north_east'
+    assert len(lines[0]) == len(lines[2]) == len(lines[3])

@@ -139,6 +139,10 @@ def test_seventeen_drones_are_too_many(tmp_path):
         ),
         (lambda d: d['drones'][0].update(altitude_m=True), r'drones\[0\] \(north\)\.altitude_m: expected a number'),
         (lambda d: d['drones'][0].update(name='3rd drone'), r'drones\[0\]\.name: expected a name of letters'),
+        (
+            lambda d: d['drones'][0]['reference'].update(stamp_s='noon'),
+            r"drones\[0\] \(north\)\.reference\.stamp_s: expected a number, got str 'noon'",
+        ),
         (lambda d: d['boards'][0].update(square=-0.25), r'boards\[0\] \(A\)\.square: must be positive'),
         (
             lambda d: d['boards'][0].update(first_cell_light='yes'),

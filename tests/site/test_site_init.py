@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import yaml
 
+from matrix_core.bags.reader import read_sequence_frames
 from matrix_core.bags.writer import SequenceBagWriter
 from matrix_core.cli.main import main
 from matrix_core.datasets import MatrixDataset
@@ -52,10 +53,13 @@ def test_site_init_calibrates_each_drone_and_leaves_out_the_one_that_saw_no_boar
     printed = capsys.readouterr().out
     assert f'{BLANK}: left out: saw no board' in printed, printed
     for v in DRONES:
-        assert f'{v}: reference frame 0 of 1, ' in printed and ' px rms' in printed, printed
+        assert f'{v}: reference frame 0 of 1 (t=1.000 s), ' in printed and ' px rms' in printed, printed
 
     site = load_site(out / 'site.yaml', require_references=True)
     assert site.drone_names == DRONES and site.name == 'square' and len(site.boards) == 2
+    # each reference names the recorded frame it was taken from, by its header stamp
+    (stamp_ns,) = [frame.stamp_ns for frame in read_sequence_frames(bag)]
+    assert [site.drone(v).reference.stamp_s for v in DRONES] == [pytest.approx(stamp_ns * 1e-9)] * len(DRONES)
     require_references(site)
     for v in DRONES:
         got, want = reference_camera(site, site.drone(v)), truth[v]

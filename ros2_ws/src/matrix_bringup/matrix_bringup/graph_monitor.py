@@ -15,7 +15,9 @@ When ``expected_frames`` frames are done, or nothing arrived for ``idle_timeout`
 summary table (also ``out_dir/graph_summary.txt``), writes ``out_dir/graph_overview.png`` and
 ``out_dir/graph_scores.csv``, and exits.
 With the references register uses (``reference_dataset`` or ``site_references``) the registration is also
-scored in reference pixels. Exit code 1 if no frame could be scored at all.
+scored in reference pixels: against the true camera of the reference frame where the site file names that
+frame's stamp (``site init``) and the recording's ground truth has it, else against the reference calibration.
+Exit code 1 if no frame could be scored at all.
 """
 
 import time
@@ -30,7 +32,7 @@ from matrix_bringup.monitor_settings import GraphMonitorSettings
 from matrix_core import topics
 from matrix_core.datasets.base import DatasetError
 from matrix_core.datasets.drone_inputs import open_references
-from matrix_core.evaluation.graph_report import write_graph_report
+from matrix_core.evaluation.graph_report import true_references, write_graph_report
 from matrix_core.message_fields import (
     ConversionError,
     camera_from_camera_info,
@@ -52,6 +54,7 @@ class GraphMonitor(SettingsNode):
         self.last_arrival = time.monotonic()
         self.done = False
         self.references = self._references()
+        self.reference_stamps = self._reference_stamps()
         history = qos_by_name('history', depth=50)
         for view in s.views:
             self.create_subscription(
@@ -108,6 +111,19 @@ class GraphMonitor(SettingsNode):
             except (DatasetError, OSError, ValueError) as exc:
                 self.get_logger().error(f'{view}: no registration pixel error: unreadable reference calibration: {exc}')
         return cameras
+
+    def _reference_stamps(self) -> dict:
+        """view -> stamp (seconds) of the recorded frame its site reference was taken from; {} without one."""
+        s = self.settings
+        if not s.site_references:
+            return {}
+        site = named_site(s.site)
+        drones = {d.name: d for d in site.drones}
+        return {
+            v: drones[v].reference.stamp_s
+            for v in s.views
+            if v in drones and drones[v].reference is not None and drones[v].reference.stamp_s is not None
+        }
 
     def _key(self, view, msg):
         self.last_arrival = time.monotonic()
@@ -182,8 +198,13 @@ class GraphMonitor(SettingsNode):
 
     def finish(self):
         s = self.settings
+        references, true_views = true_references(self.references, self.reference_stamps, self.truth)
+        if true_views:
+            self.get_logger().info(
+                f'registration scored against the true camera of the reference frame: {", ".join(true_views)}'
+            )
         self.scored = write_graph_report(
-            s.out_dir, s.views, s.area, self.truth, self.estimated, self.homography, self.images, self.references
+            s.out_dir, s.views, s.area, self.truth, self.estimated, self.homography, self.images, references
         )
         self.done = True
 

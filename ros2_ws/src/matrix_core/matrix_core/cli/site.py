@@ -87,7 +87,9 @@ def run_init(args) -> int:
         else:
             written.append(ref)
             print(
-                f'{drone}: reference frame {ref.frame} of {len(drone_frames.images)}, {ref.corners} board corners, '
+                f'{drone}: reference frame {ref.frame} of {len(drone_frames.images)}'
+                + (f' (t={ref.stamp_s:.3f} s)' if ref.stamp_s is not None else '')
+                + f', {ref.corners} board corners, '
                 f'reprojection {ref.rms_px:.2f} px rms (prior: {ref.prior})'
             )
     if not written:

@@ -78,15 +78,16 @@ def _median(values) -> str:
 
 def summary_table(scores: list, views: list) -> str:
     """Plain-text table: one row per view and an 'all' row."""
+    width = max([5, *(len(v) for v in views)])
     header = (
-        f'{"view":>5} {"frames":>6} {"calib":>5} {"rot_deg":>8} {"centre_m":>8} '
+        f'{"view":>{width}} {"frames":>6} {"calib":>5} {"rot_deg":>8} {"centre_m":>8} '
         f'{"reg_ok":>6} {"conf":>6} {"ground_m":>8} {"ref_px":>7}'
     )
     lines = [header, '-' * len(header)]
     for name, rows in [(v, [s for s in scores if s.view == v]) for v in views] + [('all', scores)]:
         registered = sum(s.reg_status == RegistrationStatus.OK for s in rows)
         lines.append(
-            f'{name:>5} {len(rows):>6} {sum(s.rot_err_deg is not None for s in rows):>5} '
+            f'{name:>{width}} {len(rows):>6} {sum(s.rot_err_deg is not None for s in rows):>5} '
             f'{_median([s.rot_err_deg for s in rows]):>8} {_median([s.centre_err_m for s in rows]):>8} '
             f'{registered:>6} {_median([s.reg_confidence for s in rows]):>6} '
             f'{_median([s.reg_ground_err_m for s in rows]):>8} {_median([s.reg_ref_err_px for s in rows]):>7}'
@@ -170,6 +171,32 @@ def score_registration(
         registration.ref_H_img if registration.ok else None,
         reference,
     )
+
+
+def true_references(references: dict, reference_stamps: dict, truth: dict, tolerance_s: float = 1e-4) -> tuple:
+    """The camera each view's registration is scored against, and the views it is true for.
+
+    A reference taken from a recorded frame (``site init``) has its calibration estimated from the boards;
+    scoring against it would add that estimate's error to the registration's. Where the recording's ground
+    truth has the reference frame (``truth`` at the view's ``reference_stamps`` stamp, within ``tolerance_s``),
+    its true camera is used instead.
+
+    Args:
+        references: view -> reference Camera (the calibration register uses); reference_stamps: view -> stamp
+            (seconds) of its reference frame; truth: (view, stamp) -> true Camera of the recording.
+
+    Returns:
+        (view -> Camera to score against, sorted views whose camera is the reference frame's true one).
+    """
+    cameras, true_views = dict(references), []
+    for view, stamp in reference_stamps.items():
+        if view not in cameras or stamp is None:
+            continue
+        near = [key for key in truth if key[0] == view and abs(key[1] - stamp) <= tolerance_s]
+        if near:
+            cameras[view] = truth[min(near, key=lambda key: abs(key[1] - stamp))]
+            true_views.append(view)
+    return cameras, sorted(true_views)
 
 
 def write_graph_report(

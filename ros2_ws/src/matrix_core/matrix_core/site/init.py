@@ -99,10 +99,12 @@ def read_boards(path) -> SiteDraft:
 @dataclass
 class DroneFrames:
     """A drone's frames to consider: (H, W, 3) BGR images and the camera each was recorded with (its K, dist
-    and size are the drone's intrinsics; its pose a prior when it is not the identity)."""
+    and size are the drone's intrinsics; its pose a prior when it is not the identity), and each frame's header
+    stamp in seconds (None for an image folder)."""
 
     images: list = field(default_factory=list)
     cameras: list = field(default_factory=list)
+    stamps: list = field(default_factory=list)
 
 
 def _has_pose(camera: Camera) -> bool:
@@ -127,6 +129,7 @@ def frames_from_bag(bag, max_frames: int) -> dict:
             if drone in out and drone in frame.cameras and len(out[drone].images) < max_frames:
                 out[drone].images.append(image)
                 out[drone].cameras.append(frame.cameras[drone])
+                out[drone].stamps.append(frame.stamp_ns * 1e-9)
     return out
 
 
@@ -156,6 +159,7 @@ def frames_from_folder(folder, intrinsics: dict, max_frames: int) -> dict:
         for f in files[::step][:max_frames]:
             frames.images.append(read_image(f))
             frames.cameras.append(camera)
+            frames.stamps.append(None)
         out[sub.name] = frames
     return out
 
@@ -168,6 +172,7 @@ class DroneReference:
     camera: Camera = None
     image: np.ndarray = None
     frame: int = -1
+    stamp_s: float = None  # the chosen frame's header stamp, None for an image folder
     rms_px: float = float('nan')
     corners: int = 0
     reason: str = ''
@@ -219,7 +224,8 @@ def calibrate_drone(drone: str, frames: DroneFrames, boards: list, prior: tuple 
             reasons.append(f'frame {k}: {result.message or result.status}')
             continue
         if best is None or (result.corners, -result.rms_px) > (best.corners, -best.rms_px):
-            best = DroneReference(drone, result.camera, image, k, result.rms_px, result.corners, prior=how)
+            stamp = frames.stamps[k] if k < len(frames.stamps) else None
+            best = DroneReference(drone, result.camera, image, k, stamp, result.rms_px, result.corners, prior=how)
     if best is None:
         return DroneReference(drone, reason='saw no board: ' + ('; '.join(reasons[:3]) or 'no frame'))
     return best
@@ -254,6 +260,7 @@ def site_document(draft: SiteDraft, references: list) -> dict:
                         'intrinsic': f'references/{ref.drone}_intrinsic.yaml',
                         'extrinsic': f'references/{ref.drone}_extrinsic.yaml',
                     },
+                    **({'stamp_s': float(ref.stamp_s)} if ref.stamp_s is not None else {}),
                 },
             }
         )

@@ -48,7 +48,7 @@ _TOP = {
 _REFERENCES = {'source': True, 'root': False}
 _DRONE = {'name': True, 'camera': True, 'reference': False, 'altitude_m': False, 'home': False}
 _CAMERA = {'image_size': True, 'K': True, 'dist': False}
-_REFERENCE = {'image': True, 'calibration': True}
+_REFERENCE = {'image': True, 'calibration': True, 'stamp_s': False}
 _CALIBRATION = {'format': True, 'intrinsic': True, 'extrinsic': True}
 _BOARD = {
     'name': True,
@@ -184,7 +184,8 @@ def _reference(where: _Where, value) -> ReferenceSpec:
         Path(_text(where / 'calibration' / 'intrinsic', cal['intrinsic'])),
         Path(_text(where / 'calibration' / 'extrinsic', cal['extrinsic'])),
     )
-    return ReferenceSpec(Path(_text(where / 'image', data['image'])), calibration)
+    stamp = _number(where / 'stamp_s', data['stamp_s']) if 'stamp_s' in data else None
+    return ReferenceSpec(Path(_text(where / 'image', data['image'])), calibration, stamp)
 
 
 def _drone(where: _Where, value, source: ReferenceSource) -> DroneSpec:

@@ -72,10 +72,14 @@ class CalibrationRef:
 class ReferenceSpec:
     """A drone's reference: one image of the (empty) scene at a known pose and that pose's calibration.
 
-    ``image``: a path relative to the site's ``references.root``, as written in the file."""
+    ``image``: a path relative to the site's ``references.root``, as written in the file. ``stamp_s``: the
+    header stamp (seconds) of the recorded frame the reference was taken from (``site init`` from a bag), None
+    otherwise; with a recording's ground truth it names the reference frame's true camera, against which the
+    graph monitor scores the registration."""
 
     image: Path
     calibration: CalibrationRef
+    stamp_s: float = None
 
 
 @dataclass(frozen=True)
