@@ -7,14 +7,15 @@ For a site file (a path or a shipped site: plaza, ring3, ring12) and a detector 
    ``--image-scale`` of the site's image size) with its ground truth; the default seed is none of
    ``train --site``'s default training and validation seeds (printed);
 2. ``matrix-tracker site init`` from that bag and the site's boards (step 3 of the tutorial);
-3. ``run_graph`` (the processes of ``ros2 launch matrix_bringup full_graph.launch.py``) on the bag with the
-   site ``site init`` wrote, the checkpoint, the recorder and the graph monitor;
+3. ``ros2 launch matrix_bringup full_graph.launch.py bag:=... site:=... checkpoint:=... record:=... monitor:=true
+   monitor_out:=...`` (step 6 of the tutorial): the whole graph on the bag with the site ``site init`` wrote,
+   the checkpoint, the recorder and the graph monitor, to its end; a non-zero exit status stops the script;
 4. ``matrix-tracker evaluate-recording`` of the recorded tracks against the bag's ground truth.
 
-It prints the commands as it runs them, then one row: site, drones, frames, the median calibration error
-(deg) and the median registration error (reference pixels) of the graph monitor (``graph_scores.csv``), and
-MODA, MOTA and IDF1 (%) of the recording. Everything goes under ``--out`` (default out/site_acceptance/SITE);
-an existing folder is replaced.
+It prints the commands as it runs them, then one row: site, drones, frames, image scale, the checkpoint's file
+name, the median calibration error (deg) and the median registration error (reference pixels) of the graph
+monitor (``graph_scores.csv``), and MODA, MOTA and IDF1 (%) of the recording. Everything goes under ``--out``
+(default out/site_acceptance/SITE); an existing folder is replaced.
 
     source scripts/env.sh
     nice -n 19 python scripts/site_acceptance.py --site ring3 --checkpoint detector_tiny_seed0.pt \\
@@ -38,17 +39,14 @@ from matrix_core.cli.train_site import DEFAULT_TRAIN_SEEDS, DEFAULT_VAL_SEEDS
 from matrix_core.site import load_site
 from matrix_core.site.shipped import site_path
 
-ROOT = Path(__file__).resolve().parents[1]
 HELD_OUT_SEED = 201
 BOARD_KEYS = ('name', 'area', 'cell_m', 'boards', 'obstacles')  # a boards description: the site file without drones
 
 
-def _run_graph() -> str:
-    built = ROOT / 'ros2_ws/install/matrix_bringup/lib/matrix_bringup/run_graph'
-    found = str(built) if built.is_file() else shutil.which('run_graph')
-    if not found:
-        raise SystemExit('run_graph not found: run make setup, then source scripts/env.sh')
-    return found
+def _ros2() -> str:
+    if not shutil.which('ros2'):
+        raise SystemExit('ros2 not found: run make setup, then source scripts/env.sh')
+    return 'ros2'
 
 
 def _run(cmd: list, commands: list, log: Path) -> None:
@@ -75,7 +73,9 @@ def main(argv=None) -> int:
     p.add_argument('--seed', type=int, default=HELD_OUT_SEED, help='seed of the held-out recording')
     p.add_argument('--image-scale', type=float, default=1.0, help="fraction of the site's image size")
     p.add_argument('--sim-config', default='complex', help="simulate's --config (crowd, light, distractors)")
-    p.add_argument('--lockstep-timeout', type=float, default=300.0, help="run_graph's --lockstep_timeout, s")
+    p.add_argument(
+        '--lockstep-timeout', type=float, help="the launch's lockstep_timeout:=, s (default: not given, the launch's)"
+    )
     p.add_argument('--out', help='output folder (default out/site_acceptance/<site name>)')
     args = p.parse_args(argv)
 
@@ -101,10 +101,13 @@ def main(argv=None) -> int:
         commands,
         out / 'site_init.log',
     )
-    graph = [_run_graph(), '--bag', flight / 'bag', '--site', site_dir / 'site.yaml', '--checkpoint', args.checkpoint]
-    graph += ['--record', rec, '--monitor', 'true', '--monitor_out', monitor]
-    graph += ['--lockstep_timeout', args.lockstep_timeout, '--log_dir', out / 'logs']
-    _run(graph, commands, out / 'run_graph.log')
+    checkpoint = Path(args.checkpoint).resolve() if Path(args.checkpoint).is_file() else args.checkpoint
+    graph = [_ros2(), 'launch', 'matrix_bringup', 'full_graph.launch.py', f'bag:={flight / "bag"}']
+    graph += [f'site:={site_dir / "site.yaml"}', f'checkpoint:={checkpoint}', f'record:={rec}']
+    graph += ['monitor:=true', f'monitor_out:={monitor}']
+    if args.lockstep_timeout is not None:
+        graph.append(f'lockstep_timeout:={args.lockstep_timeout}')
+    _run(graph, commands, out / 'launch.log')
     metrics = out / 'recording_metrics.json'
     score = ['matrix-tracker', 'evaluate-recording', rec, '--ground-truth', flight / 'bag', '--json', metrics]
     _run(score, commands, out / 'evaluate_recording.log')
@@ -117,6 +120,8 @@ def main(argv=None) -> int:
         'site': site.name,
         'drones': f'{drones}/{len(site.drone_names)}',
         'frames': args.frames,
+        'image scale': args.image_scale,
+        'checkpoint': f'`{Path(args.checkpoint).name}`',
         'calib_deg': f'{_median(rows, "rot_err_deg"):.3f}',
         'reg_px': f'{_median(rows, "reg_ref_err_px"):.2f}',
         'MODA': f'{100 * result["detection"]["moda"]:.1f}',
