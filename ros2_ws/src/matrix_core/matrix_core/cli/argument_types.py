@@ -59,3 +59,14 @@ def check_frame_range(frames, flag: str = '--frames') -> None:
     """``FIRST LAST`` of a frame range: both >= 0 and FIRST <= LAST, else a ValueError naming the flag."""
     if frames is not None and (frames[0] < 0 or frames[1] < frames[0]):
         raise ValueError(f'{flag} {frames[0]} {frames[1]}: needs 0 <= FIRST <= LAST')
+
+
+def add_site_argument(parser, data: str) -> None:
+    """``--site SITE`` of a command that reads ``data`` (``matrix_core.site.parameter.dataset_site``)."""
+    from matrix_core.site.shipped import shipped_sites
+
+    parser.add_argument(
+        '--site',
+        help=f'site file or shipped site ({", ".join(shipped_sites())}) of {data}; default: the site a site dataset '
+        f'names, else MATRIX; given, {data} must agree with it (area, drones), else an error before any work',
+    )

@@ -12,6 +12,9 @@ nothing, as its frame ``i`` is the folder's ``i``-th frame.
 A damaged bag (cut short, overwritten, left by a killed writer) is listed with the messages before the
 damage, then the reason, and exit code 1.
 
+``--site SITE``: the source's area and drones must be the site's (an error naming what differs, before any
+work); default: the site a site dataset names, else MATRIX.
+
 Topics and conventions: see ``matrix_core.bags`` and bags/README.md.
 """
 
@@ -20,6 +23,7 @@ from pathlib import Path
 
 from matrix_core.bags import write_sequence_bag
 from matrix_core.bags.salvage import topic_counts
+from matrix_core.cli.argument_types import add_site_argument
 from matrix_core.datasets import DatasetError, open_dataset
 from matrix_core.output_paths import atomic_folder, check_output
 
@@ -31,6 +35,7 @@ def add_parser(subparsers) -> None:
     p.add_argument('source', help='MATRIX-format folder or site dataset (to write a bag) or a bag folder (to list it)')
     p.add_argument('--out', help='bag folder to create (must not exist)')
     p.add_argument('--compressed', action='store_true', help='store JPEG CompressedImage instead of raw Image')
+    add_site_argument(p, 'the source folder')
     p.set_defaults(func=run)
 
 
@@ -47,6 +52,9 @@ def run(args) -> int:
     dataset = open_dataset(source)
     if not hasattr(dataset, 'pedestrian_positions'):  # the bag carries every person's ground-truth position
         raise DatasetError(f'{source} is a {dataset.format_name} folder; bag needs a MATRIX folder or a site dataset')
+    from matrix_core.site.parameter import dataset_site
+
+    dataset_site(args.site, dataset, f'--site {args.site}: {source}')  # before any work: the data is of the site
     # written under a temporary name and moved to --out when every frame is in it: a bad image (named in the
     # error) or an interrupted run leaves no bag that a player or `bag` listing could take for the sequence
     with atomic_folder(out) as partial:

@@ -17,16 +17,21 @@ is left out of the image plane only (``failures.image_plane_failed_frames``); ev
 ``--out`` must be new or empty (``--overwrite``: write into it) and not be, contain or lie inside the dataset,
 the calibration folder or the checkpoint.
 
+``--site SITE``: the dataset's area and drones must be the site's and the checkpoint's cell the site's (an
+error naming what differs, before any work); the BEV grid is then the site's area. Default: the site a site
+dataset names, else MATRIX. The site's obstacles hide people from the image-plane boxes.
+
 ``--device`` (``auto`` | ``cpu`` | ``cuda`` | ``cuda:N``, ``matrix_core.device``): where the network runs; a GPU
 this machine lacks is an error before anything is read.
 """
 
+import dataclasses
 import json
 from pathlib import Path
 
 import numpy as np
 
-from matrix_core.cli.argument_types import check_frame_range, fraction, non_negative_int
+from matrix_core.cli.argument_types import add_site_argument, check_frame_range, fraction, non_negative_int
 from matrix_core.device import DeviceSettings, resolve_device
 from matrix_core.fusion.image_boxes import ImageBoxSettings
 from matrix_core.fusion.settings import resolve_checkpoint
@@ -41,7 +46,7 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         'evaluate', help='metrics table + PNGs of a trained BEV model on a dataset', description=__doc__
     )
-    p.add_argument('dataset', help='MATRIX-format folder')
+    p.add_argument('dataset', help='MATRIX-format folder or site dataset')
     p.add_argument(
         '--checkpoint',
         required=True,
@@ -67,6 +72,7 @@ def add_parser(subparsers) -> None:
     add_overwrite_argument(p)
     p.add_argument('--heatmaps', type=non_negative_int, default=3, help='number of frames to draw heatmap PNGs for')
     p.add_argument('--iou', type=fraction, default=0.5, help='image-plane match threshold (default: 0.5)')
+    add_site_argument(p, 'the dataset')
     add_settings_arguments(p, TrackerSettings)
     add_settings_arguments(p, ImageBoxSettings)
     add_settings_arguments(p, DeviceSettings)
@@ -89,7 +95,18 @@ def run(args) -> int:
     check_frame_range(args.frames)
     torch.set_num_threads(1)
     overrides = {} if args.score_threshold is None else {'score_threshold': args.score_threshold}
+    from matrix_core.datasets import open_dataset
+    from matrix_core.site.parameter import dataset_site
+
+    site = dataset_site(args.site, open_dataset(args.dataset), f'--site {args.site}: {args.dataset}')
     model, settings = load_model(checkpoint, overrides)
+    if args.site:  # the BEV grid over the site's area, in the checkpoint's cells (the fuse node's rule)
+        from matrix_core.fusion.fuser import network_grid
+        from matrix_core.fusion.settings import FuseSettings
+
+        fuse = FuseSettings(area=list(site.area), cell_m=site.cell_m, checkpoint=str(checkpoint))
+        network_grid(settings, fuse)  # ValueError naming both cells when the site's is not the checkpoint's
+        settings = dataclasses.replace(settings, area=list(site.area))
     model = model.to(device)
     probe = BevFrames(
         args.dataset, settings, calibration=args.calibration, cache_images=False, calibration_dir=args.calibration_dir
@@ -125,7 +142,7 @@ def run(args) -> int:
     write_bev_points(out / 'detections.txt', result.detections)
     write_bev_points(out / 'tracks.txt', result.tracks)
     write_bev_points(out / 'ground_truth.txt', result.gt)
-    image_plane, image_plane_failed = _image_plane(args, data, result, views, out)
+    image_plane, image_plane_failed = _image_plane(args, data, result, views, out, site)
     failures = result.failures_dict()
     failures['image_plane_frames_failed'] = len(image_plane_failed)
     failures['image_plane_failed_frames'] = [{'frame': f, 'reason': r} for f, r in sorted(image_plane_failed.items())]
@@ -137,6 +154,7 @@ def run(args) -> int:
                 'tracking': result.tracking.as_dict(),
                 'hota': result.hota.as_dict(),
                 'image_plane': image_plane.as_dict() if image_plane else None,
+                'site': site.name,
                 'calibration': args.calibration,
                 'views': views,
                 'calibration_dir': args.calibration_dir,
@@ -171,13 +189,14 @@ def run(args) -> int:
     return 0
 
 
-def _image_plane(args, data, result, views, out) -> tuple:
+def _image_plane(args, data, result, views, out, site) -> tuple:
     """Score, print, write and draw the tracks' boxes in every drone (module docstring); returns the scores
     (None when nothing could be scored) and frame -> why it was left out of the image plane (its annotation
     file unreadable: that frame's boxes are not scored, the BEV metrics keep it)."""
     from matrix_core.evaluation.image_plane import draw_frame_png, homography_cameras, score_image_plane
     from matrix_core.metrics import BevPoints
     from matrix_core.metrics.image_boxes import format_view_table, write_mot_boxes
+    from matrix_core.site.parameter import with_site
 
     failed = {}
     for f in result.scored_frames:
@@ -203,7 +222,7 @@ def _image_plane(args, data, result, views, out) -> tuple:
         _or_none(camera_of),
         views,
         scored,
-        settings_from_namespace(ImageBoxSettings, args),
+        with_site(settings_from_namespace(ImageBoxSettings, args), site),  # the site's obstacles
         args.iou,
     )
     print(f'image plane (2D boxes of the tracks in every drone, IoU >= {args.iou:g}):')

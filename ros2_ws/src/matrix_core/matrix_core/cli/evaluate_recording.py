@@ -9,12 +9,16 @@ metrics are of the detections when recorded (else of the tracks); tracking metri
 table of ``evaluate`` and lists frames without tracks; ``--png`` draws the recorded tracks beside the
 ground-truth trajectories.
 
-Image plane, with ``--dataset`` (the MATRIX folder the sequence bag was made from; bag frame ``i`` is its
-``i``-th frame): the recorded ``/Dn/detections_2d`` against the annotated boxes at IoU >= ``--iou``, per drone
+Image plane, with ``--dataset`` (the MATRIX folder or site dataset the sequence bag was made from; bag frame ``i``
+is its
+``i``-th frame): the recorded ``/<drone>/detections_2d`` against the annotated boxes at IoU >= ``--iou``, per drone
 and overall (precision, recall, MOTA, IDF1; ``metrics.image_boxes``), and the share of 2D ids that are
 track ids of /tracks in the same frame; ``--boxes-2d`` writes them as ``frame,id,x,y,w,h,score,drone``,
 ``--png-2d`` draws one frame of every drone, ``--overlays DIR`` writes the recorded overlay images
 (``/Dn/overlay/compressed``, when fuse published them) of that frame as ``DIR/overlay_Dn.png``.
+
+``--site SITE``: the sequence bag's drones and ``--dataset``'s area and drones must be the site's (an error
+naming what differs, before any work); the ground truth outside the site's area is ignored (``--area`` wins).
 
 A bag without ``/ground_truth/pedestrians`` (a user's own recording) is not scored: the command says the
 evaluation was skipped, writes nothing and exits 0.
@@ -24,6 +28,7 @@ import json
 from pathlib import Path
 
 from matrix_core.cli.argument_types import (
+    add_site_argument,
     check_frame_range,
     fraction,
     non_negative_float,
@@ -61,11 +66,14 @@ def add_parser(subparsers) -> None:
     )
     p.add_argument('--threshold', type=positive_float, default=0.5, help='detection match distance, m (default: 0.5)')
     p.add_argument('--gate', type=positive_float, default=1.0, help='tracking match distance, m (default: 1.0)')
-    p.add_argument('--dataset', help='MATRIX folder of the sequence (annotated boxes): score /Dn/detections_2d')
+    p.add_argument(
+        '--dataset', help='MATRIX folder or site dataset of the sequence (annotated boxes): score detections_2d'
+    )
     p.add_argument('--iou', type=fraction, default=0.5, help='image-plane match threshold (default: 0.5)')
     p.add_argument('--boxes-2d', help='with --dataset: write the recorded 2D boxes to this text file')
     p.add_argument('--png-2d', help='with --dataset: draw the middle frame of every drone into this PNG')
     p.add_argument('--overlays', help='with --dataset: write the recorded overlay images of that frame here')
+    add_site_argument(p, 'the sequence bag and --dataset')
     p.add_argument('--json', help='also write the metrics to this JSON file')
     p.add_argument('--png', help='also draw the tracks and the ground-truth trajectories into this PNG')
     add_overwrite_argument(p)
@@ -84,6 +92,9 @@ def run(args) -> int:
             f'evaluation skipped: {args.ground_truth} has no ground truth ({topics.PEDESTRIANS_TOPIC}); nothing written'
         )
         return 0
+    area = args.area
+    if args.site:  # before any work: the sequence bag and --dataset are of the site; its area is scored
+        area = area or list(_check_site(args).area)
     clock = read_sequence_clock(args.ground_truth).overridden(args.start_time, args.frame_period)
     recording = (
         read_recording(
@@ -93,19 +104,19 @@ def run(args) -> int:
         else read_recording(args.recording)
     )
     gt = ground_truth_from_bag(args.ground_truth, clock)
-    result = score_recording(recording, gt, args.area, args.frames, args.threshold, args.gate)
+    result = score_recording(recording, gt, area, args.frames, args.threshold, args.gate)
     gt_frames = sorted(set(result.gt.frames.tolist()))
     lost = sorted(set(gt_frames) - set(recording.track_frames)) if recording.track_frames is not None else None
     print(
         f'recording {args.recording}: detection metrics of the {result.detections_source}; '
         f'{len(gt_frames)} ground-truth frames'
-        + (f', grid area {tuple(round(v, 3) for v in recording.area)}' if recording.area and args.area is None else '')
+        + (f', grid area {tuple(round(v, 3) for v in recording.area)}' if recording.area and area is None else '')
     )
     print(format_metrics(result.detection, result.tracking, result.hota))
     if lost is not None:
         print(f'frames without a TrackArray: {lost if lost else "none"}')
     if args.png:
-        _draw(args.png, result, args.area or recording.area, args.recording)
+        _draw(args.png, result, area or recording.area, args.recording)
     image_plane = _image_plane(args, clock, recording) if args.dataset else None
     if args.json:
         atomic_write_text(
@@ -144,6 +155,20 @@ def _check_paths(args) -> None:
     for flag, path in outputs.items():
         if path:
             check_output(path, inputs, args.overwrite, flag)
+
+
+def _check_site(args):
+    """The site ``--site`` names; SiteError when the sequence bag has drones it lacks or ``--dataset`` is not
+    of it (area, drones)."""
+    from matrix_core.bags.reader import bag_topics
+    from matrix_core.datasets.open import open_dataset
+    from matrix_core.site.parameter import check_bag_drones, dataset_site, named_site
+
+    site = named_site(args.site)
+    check_bag_drones(site, bag_topics(args.ground_truth), f'--ground-truth {args.ground_truth}')
+    if args.dataset:
+        dataset_site(args.site, open_dataset(args.dataset), f'--site {args.site}: --dataset {args.dataset}')
+    return site
 
 
 def _image_plane(args, clock, recording) -> dict:

@@ -129,7 +129,8 @@ def ids_in_tracks(boxes: FrameBoxes, tracks) -> float:
 def annotated_boxes(dataset, frames, views, frame_numbers=None) -> FrameBoxes:
     """Annotated boxes of ``frames`` (dataset frame numbers) in ``views``, clipped to the image; the output
     frame of ``frames[k]`` is ``frame_numbers[k]`` (default: the dataset frame itself)."""
-    w, h = dataset.image_size
+    size = getattr(dataset, 'view_image_size', None)  # a site dataset's drones have cameras of their own
+    sizes = {v: size(v) if size else dataset.image_size for v in views}
     rows = ([], [], [], [])
     for k, f in enumerate(frames):
         for person in dataset.annotations(f):
@@ -141,7 +142,7 @@ def annotated_boxes(dataset, frames, views, frame_numbers=None) -> FrameBoxes:
                             (frame_numbers or frames)[k],
                             v,
                             person.person_id,
-                            clip_box([b.xmin, b.ymin, b.xmax, b.ymax], w, h),
+                            clip_box([b.xmin, b.ymin, b.xmax, b.ymax], *sizes[v]),
                         ),
                     ):
                         col.append(val)

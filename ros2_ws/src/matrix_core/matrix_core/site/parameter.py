@@ -112,7 +112,12 @@ def follow_site(settings, defaults: dict = None):
     name = getattr(settings, 'site', None)
     if name is None:
         return settings
-    site = named_site(name)
+    return with_site(settings, named_site(name), defaults)
+
+
+def with_site(settings, site: Site, defaults: dict = None):
+    """``settings`` (any settings dataclass, with or without a ``site`` field) with its site-following fields
+    still at their MATRIX default replaced by ``site``'s values (:func:`follow_site` for a loaded site)."""
     matrix = matrix_site()
     changes = {}
     for f in site_following_fields(type(settings), defaults):
@@ -158,3 +163,31 @@ def check_bag_drones(site: Site, topic_names, bag) -> None:
     """SiteError naming the drones the recording at ``bag`` (its ``topic_names``) has and ``site`` does not:
     such a recording is of another site, and is refused before anything is played."""
     check_drones(site, recorded_drones(topic_names), f'bag {bag}')
+
+
+def dataset_site(name, dataset, where: str = None) -> Site:
+    """The site of a command's ``--site`` for ``dataset`` (a ``MultiviewDataset``): ``name`` None, the site the
+    dataset names (a site dataset's ``site.yaml``), else the MATRIX site; given (a path or a shipped site),
+    that site, which the dataset must agree with (:func:`check_dataset_site`, ``where`` default its folder)."""
+    if name is None:
+        return getattr(dataset, 'site', None) or matrix_site()
+    site = named_site(name)
+    check_dataset_site(site, dataset, where or str(dataset.root))
+    return site
+
+
+def check_dataset_site(site: Site, dataset, where: str) -> None:
+    """SiteError, naming ``where`` (a flag and a folder) and each difference, when ``dataset``'s area is not
+    ``site``'s or it has drones the site lacks (a dataset of some of the site's drones agrees)."""
+    differ = []
+    if len(dataset.area) != len(site.area) or any(
+        abs(float(a) - float(b)) > 1e-6 for a, b in zip(dataset.area, site.area)
+    ):
+        differ.append(f'its area {[float(v) for v in dataset.area]} is not the area {list(site.area)}')
+    unknown = [v for v in dataset.views if v not in site.drone_names]
+    if unknown:
+        differ.append(f'its drones {unknown} are not drones ({", ".join(site.drone_names)})')
+    if differ:
+        raise SiteError(
+            f'{where}: {"; ".join(differ)} of site {site.name} ({site.path}); give --site the site of this data'
+        )
